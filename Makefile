@@ -1,0 +1,33 @@
+# Two entry points (see README): `make demo` and `make test`.
+# Each creates or reuses .venv and installs what it needs.
+PYTHON ?= python3.11
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test lint bench clean
+
+$(STAMP): pyproject.toml
+	@command -v $(PYTHON) >/dev/null || { echo "need $(PYTHON)"; exit 1; }
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@if ! dpkg -s libegl1 libgl1 libosmesa6 >/dev/null 2>&1; then \
+		(apt-get update -qq && apt-get install -y -qq libegl1 libgl1 libosmesa6 libegl-mesa0 >/dev/null) \
+		|| echo "warning: could not install Mesa EGL packages; video rendering may fail"; fi
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e ".[dev]"
+	@touch $(STAMP)
+
+demo: $(STAMP)
+	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller stand --course flat \
+		--duration 10 --push t=3,fx=50,fy=0,dur=0.1 --out runs/demo
+
+test: $(STAMP)
+	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/ruff format --check src tests benchmarks
+	MUJOCO_GL=egl $(VENV)/bin/pytest -q
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_sim.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info src/*.egg-info

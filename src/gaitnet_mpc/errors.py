@@ -1,0 +1,38 @@
+"""One exception hierarchy for the whole package.
+
+Every error raised on bad input names the field, the value received and what was
+expected, so a user can fix a command line or a course file without reading code.
+"""
+
+from __future__ import annotations
+
+
+class GaitNetMPCError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class ConfigError(GaitNetMPCError, ValueError):
+    """A configuration value, CLI argument or file field is invalid.
+
+    The message always reads ``<field>: got <value>, expected <what>``.
+    """
+
+    def __init__(self, field: str, value: object, expected: str) -> None:
+        self.field = field
+        self.value = value
+        self.expected = expected
+        super().__init__(f"{field}: got {value!r}, expected {expected}")
+
+
+class CourseFormatError(ConfigError):
+    """A terrain course (JSON file or dict) is malformed."""
+
+
+class QPSolveError(GaitNetMPCError, RuntimeError):
+    """A QP backend failed (infeasible, max iterations, numerical trouble)."""
+
+    def __init__(self, backend: str, status: str, detail: str = "") -> None:
+        self.backend = backend
+        self.status = status
+        msg = f"QP backend {backend!r} failed with status {status!r}"
+        super().__init__(f"{msg}: {detail}" if detail else msg)
