@@ -21,7 +21,9 @@ def test_unknown_robot_names_choices() -> None:
         load_robot("atlas")
 
 
-@pytest.mark.parametrize(("name", "nv", "mass_kg"), [("humanoid3d", 24, 16.0), ("biped2d", 7, 10.0)])
+@pytest.mark.parametrize(
+    ("name", "nv", "mass_kg"), [("humanoid3d", 24, 16.0), ("biped2d", 7, 10.0)]
+)
 def test_dof_and_mass(name: str, nv: int, mass_kg: float) -> None:
     r = load_robot(name)
     assert r.nv == nv
@@ -112,7 +114,9 @@ def test_mujoco_pinocchio_adam_agree(robot: RobotModel) -> None:
         mujoco.mj_subtreeVel(m, d)
         root = 1  # the trunk: its subtree is the whole robot
         com_mj = d.subtree_com[root].copy()
-        h_mj = np.concatenate([robot.total_mass_kg * d.subtree_linvel[root], d.subtree_angmom[root]])
+        h_mj = np.concatenate(
+            [robot.total_mass_kg * d.subtree_linvel[root], d.subtree_angmom[root]]
+        )
 
         q, v = robot.mj_to_pin(qpos, qvel)
         hg = pin.computeCentroidalMomentum(robot.pin_model, pdata, q, v)
@@ -122,7 +126,9 @@ def test_mujoco_pinocchio_adam_agree(robot: RobotModel) -> None:
         base_h, base_twist = robot.adam_base(qpos, qvel)
         s = qpos[robot.joint_qpos_adr]
         sd = qvel[robot.joint_dof_adr]
-        np.testing.assert_allclose(np.asarray(kd.CoM_position(base_h, s)).ravel(), com_mj, atol=1e-8)
+        np.testing.assert_allclose(
+            np.asarray(kd.CoM_position(base_h, s)).ravel(), com_mj, atol=1e-8
+        )
         cmm = np.asarray(kd.centroidal_momentum_matrix(base_h, s))
         h_adam = cmm @ np.concatenate([base_twist, sd])
         np.testing.assert_allclose(h_adam, h_mj, atol=1e-8)

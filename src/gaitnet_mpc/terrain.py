@@ -39,7 +39,7 @@ import json
 import math
 import types
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +51,8 @@ from gaitnet_mpc.errors import ConfigError, CourseFormatError
 __all__ = [
     "BUILTIN_COURSES",
     "FEET_VALUES",
+    "OBSTACLE_RGBA",
+    "PATCH_RGBA",
     "Course",
     "Obstacle",
     "Patch",
@@ -141,13 +143,18 @@ def _check_foot(foot: object) -> str:
 
 
 def _point_xy(p_xy: ArrayLike, field_path: str) -> tuple[float, float]:
-    arr = np.asarray(p_xy, dtype=float).reshape(-1)
+    try:
+        arr = np.asarray(p_xy, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        arr = np.full(1, np.nan)
     if arr.shape[0] not in (2, 3) or not np.all(np.isfinite(arr)):
         raise ConfigError(field_path, p_xy, "a finite (x, y) or (x, y, z) point in metres")
     return float(arr[0]), float(arr[1])
 
 
-def _rect_distance(x: float, y: float, x_min: float, x_max: float, y_min: float, y_max: float):
+def _rect_distance(
+    x: float, y: float, x_min: float, x_max: float, y_min: float, y_max: float
+) -> float:
     """Euclidean distance (m) from point (x, y) to a closed rectangle (0 inside)."""
     dx = max(x_min - x, 0.0, x - x_max)
     dy = max(y_min - y, 0.0, y - y_max)
@@ -350,8 +357,6 @@ class Course:
         raw_obstacles = d.get("obstacles", [])
         if not isinstance(raw_obstacles, list | tuple):
             raise CourseFormatError("obstacles", raw_obstacles, "a list of obstacles")
-        ground = cls.__new__(cls)  # patch-only view used to find each obstacle's base height
-        object.__setattr__(ground, "patches", patches)
         obstacles = []
         for i, ob in enumerate(raw_obstacles):
             path = f"obstacles[{i}]"
@@ -364,12 +369,13 @@ class Course:
             if not height_m > 0.0:
                 raise CourseFormatError(f"{path}.height", ob["height"], "a height > 0 m")
             c = (0.5 * (x_min + x_max), 0.5 * (y_min + y_max))
-            z_base = Course.ground_height_at(ground, *c)
-            if z_base is None:
+            k = _top_patch_index(patches, *c)
+            if k is None:
                 raise CourseFormatError(
                     path, c, "its centre (x, y) to lie on a patch (obstacles stand on the ground)"
                 )
-            obstacles.append(Obstacle(x_min, x_max, y_min, y_max, height_m, z_base))
+            z_base_m = patches[k].z_top_m
+            obstacles.append(Obstacle(x_min, x_max, y_min, y_max, height_m, z_base_m))
 
         raw_start = d.get("start_xy", [0.0, 0.0])
         if not isinstance(raw_start, list | tuple) or len(raw_start) != 2:
@@ -418,11 +424,7 @@ class Course:
 
         Where patches overlap, the one with the highest top wins (ties: lowest index).
         """
-        best: int | None = None
-        for i, p in enumerate(self.patches):
-            if p.contains(x, y) and (best is None or p.z_top_m > self.patches[best].z_top_m):
-                best = i
-        return best
+        return _top_patch_index(self.patches, x, y)
 
     def ground_height_at(self, x: float, y: float) -> float | None:
         """Top height ``z_top_m`` of the patch under (x, y) [m], None over a hole.
@@ -579,9 +581,20 @@ class Course:
                 if b >= a
             ]
             if pieces:
-                x_lo, x_hi = min(pieces, key=lambda ab: max(ab[0] - x_target, 0.0, x_target - ab[1]))
+                x_lo, x_hi = min(
+                    pieces, key=lambda ab: max(ab[0] - x_target, 0.0, x_target - ab[1])
+                )
         z = p.z_top_m
         return np.array([x_lo, y_lo, z - z_tol_m]), np.array([x_hi, y_hi, z + z_tol_m])
+
+
+def _top_patch_index(patches: Sequence[Patch], x: float, y: float) -> int | None:
+    """Index of the highest patch holding (x, y) (ties: lowest index), None if none does."""
+    best: int | None = None
+    for i, p in enumerate(patches):
+        if p.contains(x, y) and (best is None or p.z_top_m > patches[best].z_top_m):
+            best = i
+    return best
 
 
 def _shrink(lo: float, hi: float, margin_m: float) -> tuple[float, float]:
@@ -633,10 +646,11 @@ def gap_course(width_m: float = 0.20, x_m: float = 1.5) -> Course:
 
 
 #: Stepping-stone layout: (x_min, x_max, y_min, y_max, feet, z in units of dz_m).
-#: Both-feet stones are 0.5 m wide; left-only stones sit on y >= 0 and right-only stones on
-#: y <= 0 with a few cm of lateral offset between them.  Gaps between consecutive stones of
-#: the same lane are 0.05-0.12 m, so several steps are longer than the nominal 0.17 m (the
-#: longest step, from the last lane stone to the next wide stone, is about 0.28 m).
+#: Both-feet stones are 0.30 m long and 0.5 m wide; left-only stones (0.20-0.22 m long) sit
+#: on y >= 0 and right-only stones on y <= 0, with a few cm of lateral offset between them.
+#: Along x, consecutive stones are either staggered (a left and a right stone overlap) or
+#: separated by 0.08-0.10 m; within one foot's lane the gaps are 0.08-0.20 m.  A feasible
+#: footstep sequence needs steps of 0.13-0.25 m, several longer than the nominal 0.17 m.
 _STONES: tuple[tuple[float, float, float, float, str, int], ...] = (
     (0.88, 1.18, -0.25, 0.25, "both", 0),
     (1.26, 1.46, 0.01, 0.24, "left", 1),
@@ -658,8 +672,9 @@ def stepping_stones_course(dz_m: float = 0.02) -> Course:
 
     Start platform x in [-1, 0.8] m; stones from x = 0.88 to 3.30 m mixing 0.30 m long,
     0.5 m wide "both" stones with narrow "left"-only (y >= 0) and "right"-only (y <= 0)
-    stones laterally offset by a few cm; gaps of 0.08-0.10 m between consecutive stones of
-    a lane; stone tops at 0 or ``±dz_m`` (m); final platform from 3.40 m to 25 m.
+    stones laterally offset by a few cm; gaps of 0.08-0.10 m between stones along x (up to
+    0.20 m within one foot's lane); stone tops at 0 or ``±dz_m`` (m); final platform from
+    3.40 m to 25 m.  ``dz_m = 0`` gives level stones.
     """
     dz_m = _param(dz_m, "stepping-stones.dz_m", -1e-12, 0.1, "a height step in [0, 0.1) m")
     patches = [_platform(_COURSE_X_START_M, _START_PLATFORM_END_M)]

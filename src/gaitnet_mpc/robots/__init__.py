@@ -7,7 +7,10 @@ from gaitnet_mpc.robots import biped2d, humanoid3d
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET, RobotSpec
 
-ROBOTS: dict[str, RobotSpec] = {humanoid3d.SPEC.name: humanoid3d.SPEC, biped2d.SPEC.name: biped2d.SPEC}
+ROBOTS: dict[str, RobotSpec] = {
+    humanoid3d.SPEC.name: humanoid3d.SPEC,
+    biped2d.SPEC.name: biped2d.SPEC,
+}
 
 
 def load_robot(name: str) -> RobotModel:

@@ -75,9 +75,7 @@ class RobotModel:
         self.torque_limit_nm = np.array([m.actuator_ctrlrange[a, 1] for a in range(m.nu)])
         self.trunk_body_id: int = m.body(self.spec.trunk_body).id
         self.foot_site_ids = {f: m.site(self.spec.foot_sites[f]).id for f in FEET}
-        self.foot_geom_ids = {
-            f: tuple(m.geom(g).id for g in self.spec.foot_geoms[f]) for f in FEET
-        }
+        self.foot_geom_ids = {f: tuple(m.geom(g).id for g in self.spec.foot_geoms[f]) for f in FEET}
         self.leg_joint_index = {
             f: np.array([self.joint_names.index(j) for j in self.spec.leg_joints[f]]) for f in FEET
         }
@@ -139,7 +137,9 @@ class RobotModel:
         """Standing joint angles [rad] in actuator order."""
         return np.array([self.spec.nominal_joint_pos_rad.get(n, 0.0) for n in self.joint_names])
 
-    def standing_qpos(self, x_m: float = 0.0, y_m: float = 0.0, ground_z_m: float = 0.0) -> np.ndarray:
+    def standing_qpos(
+        self, x_m: float = 0.0, y_m: float = 0.0, ground_z_m: float = 0.0
+    ) -> np.ndarray:
         """MuJoCo qpos of the nominal pose with both feet resting on ground at ``ground_z_m``."""
         m = self.mj_model
         data = mujoco.MjData(m)

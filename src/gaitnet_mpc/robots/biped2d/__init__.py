@@ -12,9 +12,11 @@ SPEC = RobotSpec(
     foot_sites={"left": "left_foot_center", "right": "right_foot_center"},
     foot_geoms={"left": ("left_foot",), "right": ("right_foot",)},
     trunk_body="trunk",
+    # Split stance (left foot 0.08 m ahead, right foot 0.08 m behind the hips, same
+    # height): two point feet at one x would make standing an inverted pendulum.
     nominal_joint_pos_rad={
-        "left_hip_pitch": -0.35,
-        "right_hip_pitch": -0.35,
+        "left_hip_pitch": -0.55,
+        "right_hip_pitch": -0.15,
         "left_knee": 0.7,
         "right_knee": 0.7,
     },

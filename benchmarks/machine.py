@@ -1,0 +1,22 @@
+"""Machine and version header shared by the benchmark reports."""
+
+from __future__ import annotations
+
+import os
+import platform
+from importlib.metadata import PackageNotFoundError, version
+
+
+def machine_info(packages: tuple[str, ...] = ("numpy", "mujoco", "pin")) -> str:
+    """One Markdown line naming the CPU, core count, Python and package versions."""
+    parts = [
+        f"CPU: {platform.processor() or platform.machine()}",
+        f"cores: {os.cpu_count()}",
+        f"Python {platform.python_version()}",
+    ]
+    for name in packages:
+        try:
+            parts.append(f"{name} {version(name)}")
+        except PackageNotFoundError:
+            parts.append(f"{name} (not installed)")
+    return ", ".join(parts)

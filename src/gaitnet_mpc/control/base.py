@@ -1,0 +1,67 @@
+"""The interface every controller implements, and the per-episode MPC statistics."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gaitnet_mpc.sim.state import RobotState
+
+
+@dataclass
+class MPCStats:
+    """Per-solve records of an MPC controller (one entry per solve)."""
+
+    solve_time_s: list[float] = field(default_factory=list)
+    qps_per_solve: list[int] = field(default_factory=list)
+    converged: list[bool] = field(default_factory=list)
+    full_solve: list[bool] = field(default_factory=list)
+
+    def record(self, solve_time_s: float, n_qps: int, converged: bool, full: bool) -> None:
+        self.solve_time_s.append(solve_time_s)
+        self.qps_per_solve.append(n_qps)
+        self.converged.append(converged)
+        self.full_solve.append(full)
+
+    def summary(self) -> dict[str, float | int | None]:
+        """The ``mpc`` block of ``summary.json``."""
+        if not self.solve_time_s:
+            return {
+                "solves": 0,
+                "solve_ms_median": None,
+                "solve_ms_p99": None,
+                "qps_per_solve_mean": None,
+            }
+        ms = 1e3 * np.asarray(self.solve_time_s)
+        return {
+            "solves": len(ms),
+            "solve_ms_median": float(np.median(ms)),
+            "solve_ms_p99": float(np.percentile(ms, 99)),
+            "qps_per_solve_mean": float(np.mean(self.qps_per_solve)),
+            "converged_fraction": float(np.mean(self.converged)),
+        }
+
+
+class Controller(ABC):
+    """Maps a measured :class:`RobotState` to joint torques [N m] in actuator order."""
+
+    name: str = "controller"
+
+    def reset(self, state: RobotState) -> None:  # noqa: B027 - optional hook
+        """Called once with the initial state before the first :meth:`compute`."""
+
+    @abstractmethod
+    def compute(self, state: RobotState) -> np.ndarray:
+        """Joint torques for this tick; the simulator saturates them at the limits."""
+
+    @property
+    def mpc_stats(self) -> MPCStats | None:
+        """Solve statistics, or None for controllers without an MPC."""
+        return None
+
+    @property
+    def step_durations_s(self) -> list[float]:
+        """Planned duration of each step the controller started (empty if it does not step)."""
+        return []

@@ -1,0 +1,38 @@
+"""Controller registry: name -> factory building a :class:`Controller` for one episode."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from gaitnet_mpc.control.base import Controller
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.robots import RobotModel
+from gaitnet_mpc.terrain import Course
+
+
+@dataclass(frozen=True)
+class ControllerContext:
+    """What a controller factory may use: the robot model, the course (for one-step
+    preview only), the velocity command and free-form options from the CLI."""
+
+    robot: RobotModel
+    course: Course
+    command: Any
+    options: dict[str, Any]
+
+
+def _stand(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.stand import StandController
+
+    return StandController(ctx.robot)
+
+
+CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {"stand": _stand}
+
+
+def make_controller(name: str, ctx: ControllerContext) -> Controller:
+    if name not in CONTROLLERS:
+        raise ConfigError("--controller", name, f"one of {sorted(CONTROLLERS)}")
+    return CONTROLLERS[name](ctx)

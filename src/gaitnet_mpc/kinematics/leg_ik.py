@@ -1,0 +1,528 @@
+"""Analytic inverse kinematics of the legs (paper Appendix B, eqs. 31-40), vectorised over N.
+
+5-DoF humanoid leg (``humanoid3d``)
+===================================
+
+Joint order (= the leg's actuator order): ``q = [hip_yaw q0, hip_roll q1, hip_pitch q2,
+knee q3, ankle_pitch q4]``. All geometry is read from the MJCF (:func:`leg_geometry`); for
+``humanoid3d`` (side sign ``s = +1`` left, ``-1`` right, lengths in m, trunk frame ``B``):
+
+* hip yaw joint at ``p_yaw = (0, 0.045 s, -0.17)`` in ``B``, axis ``z``;
+* hip roll joint at ``p_roll = (0, 0, -0.05)`` in the yaw link, axis ``x``;
+* hip pitch joint at ``p_pitch = (0, 0.02 s, 0)`` in the roll link (Appendix B's
+  ``r_{21,y}``), axis ``y``;
+* knee ``l1 = 0.22`` below the hip pitch joint, ankle ``l2 = 0.22`` below the knee, both
+  axis ``y``; knee flexion is positive (range 0..2.4 rad);
+* the foothold point ``p_f`` is the site ``{side}_foot_center`` at ``c = (0.015, 0, 0)`` in
+  the foot frame (line foot along the foot ``x`` axis).
+
+Forward kinematics (``Rx, Ry, Rz`` elementary rotations, ``theta = q2 + q3 + q4``)::
+
+    p_f^B = p_yaw + Rz(q0) [p_roll + Rx(q1) (p_pitch + Ry(q2) (0,0,-l1)
+                                             + Ry(q2+q3) (0,0,-l2) + Ry(theta) c)]
+    R_foot^B = Rz(q0) Rx(q1) Ry(theta)
+
+Closed form used here (every step exact, no iteration):
+
+1. Target in the trunk frame (eqs. 36-37 with the trunk origin instead of the CoM):
+   ``p^B = R_WB^T (p_f^W - p_WB)``.
+2. Hip yaw (eq. 31 generalised): ``q0 = wrap(psi_des - psi_B)`` with ``psi_B =
+   atan2(R_WB[1,0], R_WB[0,0])`` the trunk heading; the default ``psi_des = psi_B`` gives
+   ``q0 = 0`` exactly as eq. 31.
+3. Roll-joint-to-target vector in the yaw link (eq. 36): ``r1 = Rz(q0)^T (p^B - p_yaw) -
+   p_roll``. Every link after the roll joint moves in the roll link's x-z plane, offset by
+   ``w = p_pitch_y`` (``r_{21,y}``) along its y axis, so the y row of the FK reads
+   ``cos(q1) r1_y + sin(q1) r1_z = w``, whose solution with the leg hanging down is
+   (eqs. 33, 38) ``q1 = atan2(r1_z, r1_y) + arccos(w / rho)``, ``rho = |(r1_y, r1_z)|``.
+4. Foot horizontal in the world (eq. 32 generalised to trunk roll/pitch/yaw and hip
+   roll/yaw): with ``g = Rz(q0)^T R_WB^T e_z`` (world up in the yaw link) the foot axis
+   ``u = Rx(q1) Ry(theta) e_x`` satisfies ``g . u = 0`` iff
+   ``theta = atan2(g_x, g_z cos q1 - g_y sin q1)`` (the branch whose sole faces down).
+5. ``q1`` and ``theta`` do not depend on ``q2, q3``, so the 0.015 m foot-centre offset is
+   removed exactly: ankle in the pitch-joint x-z plane
+   ``a = (Rx(q1)^T r1 - p_pitch)_{xz} - Ry(theta) c``.
+6. Planar two-link chain (eqs. 34, 35, 40): ``d = |a|``,
+   ``q3 = arccos((d^2 - l1^2 - l2^2) / (2 l1 l2))`` and
+   ``q2 = atan2(-a_x, -a_z) - atan2(l2 sin q3, l1 + l2 cos q3)``.
+7. Ankle (eq. 32): ``q4 = theta - q2 - q3``.
+
+Deviations from Appendix B (and why)
+------------------------------------
+
+* Signs: the MJCF uses right-handed joint axes with knee flexion positive, so eq. 35
+  (``q3 = 2 arcsin(r_xz / 2l) - pi <= 0``) becomes ``q3 = pi - 2 arcsin(d / 2l)`` (same
+  magnitude, opposite sign), written with ``arccos`` to allow ``l1 != l2``; eq. 34's hip
+  pitch and eq. 33's hip roll are written with ``atan2`` instead of ``arccos``/``arcsin``
+  sums so that all quadrants and both sides (``s = +-1``) are handled by one formula.
+* The foothold point ``p_f`` is 0.015 m ahead of the ankle (the paper's ``p_f`` is the
+  ankle). Step 5 removes the offset exactly because roll and foot pitch are solved first.
+* Eq. 31 (``q0 = 0``) is generalised to a desired world foot yaw ``psi_des``:
+  ``q0 = psi_des - psi_B``. With zero trunk roll/pitch the foot heading then equals
+  ``psi_des`` exactly; with a tilted trunk the realised heading differs from ``psi_des`` by
+  a term of second order in the tilt (the foot heading is not a fifth constraint here).
+* Eq. 32 (``q4 = -q2 - q3 - theta_body``) keeps the foot level only for a trunk pitched
+  in the sagittal plane; step 4 keeps the foot's long axis exactly horizontal for any trunk
+  orientation and hip roll/yaw (it reduces to eq. 32 when roll = yaw = 0). The foot roll
+  is not controllable (no ankle roll), which a line foot does not need.
+* Eq. 37 takes the hip position from the CoM ``p_c`` and ``r_c1``; here it is taken from
+  the trunk (root joint) frame, which is where the MJCF defines the hip.
+* Eq. 40's ``r_{1,xz}`` is the pitch-joint-to-target distance; here ``d`` is the
+  pitch-joint-to-*ankle* distance after removing the foot offset (step 5).
+
+Out-of-reach targets (``d > l1 + l2``, ``d`` below the knee-limit minimum, ``rho < |w|``)
+and solutions past a joint limit are mapped to the nearest feasible solution: each joint is
+clipped to its range in the order ``q0, q1, q3, q2, q4`` and the later joints are computed
+from the clipped earlier ones (so the foot stays horizontal whenever ``q4`` is inside its
+range); the result is always finite and within limits, and ``reachable`` is False.
+
+Planar biped leg (``biped2d``)
+==============================
+
+``q = [hip_pitch, knee]`` with the hip at ``p_hip`` in the trunk frame and two links
+``l1, l2`` hanging along ``-z``; steps 6 of the 5-DoF leg with the target rotated into the
+trunk frame by the trunk pitch (the root hinge about ``y``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+
+from gaitnet_mpc.robots.model import RobotModel
+from gaitnet_mpc.robots.spec import FEET
+
+_TOL_GEOMETRY = 1e-12
+
+
+# ------------------------------------------------------------------------ data types
+@dataclass(frozen=True)
+class LegGeometry:
+    """Kinematic parameters of one 5-DoF leg, read from the MJCF (lengths in m).
+
+    Attributes:
+        foot: ``"left"`` or ``"right"``.
+        p_yaw_trunk_m: hip yaw joint in the trunk frame (3,).
+        p_roll_yaw_m: hip roll joint in the hip-yaw link frame (3,).
+        p_pitch_roll_m: hip pitch joint in the hip-roll link frame (3,); its y entry is
+            Appendix B's ``r_{21,y}`` (signed, ``+0.02`` left, ``-0.02`` right).
+        thigh_m: hip pitch joint to knee, along ``-z`` (``l1``).
+        shank_m: knee to ankle pitch joint, along ``-z`` (``l2``).
+        p_foot_ankle_m: foothold point ``p_f`` in the foot (ankle) frame (3,), y = 0.
+        lower_rad: joint lower limits (5,), leg joint order.
+        upper_rad: joint upper limits (5,), leg joint order.
+    """
+
+    foot: str
+    p_yaw_trunk_m: np.ndarray
+    p_roll_yaw_m: np.ndarray
+    p_pitch_roll_m: np.ndarray
+    thigh_m: float
+    shank_m: float
+    p_foot_ankle_m: np.ndarray
+    lower_rad: np.ndarray
+    upper_rad: np.ndarray
+
+
+@dataclass(frozen=True)
+class PlanarLegGeometry:
+    """Kinematic parameters of one planar 2-DoF leg (biped2d), lengths in m.
+
+    Attributes:
+        foot: ``"left"`` or ``"right"``.
+        p_hip_trunk_xz_m: hip pitch joint (x, z) in the trunk frame (2,).
+        thigh_m: hip to knee along ``-z`` (``l1``).
+        shank_m: knee to the foot point along ``-z`` (``l2``).
+        lower_rad: joint lower limits (2,) ``[hip_pitch, knee]``.
+        upper_rad: joint upper limits (2,).
+    """
+
+    foot: str
+    p_hip_trunk_xz_m: np.ndarray
+    thigh_m: float
+    shank_m: float
+    lower_rad: np.ndarray
+    upper_rad: np.ndarray
+
+
+class LegIKSolution(NamedTuple):
+    """Result of a vectorised leg IK call.
+
+    Attributes:
+        q_rad: joint angles (N, n_leg_joints) in the leg's joint order, always finite and
+            within the joint limits.
+        reachable: (N,) False where the target was out of reach or a joint was clipped.
+    """
+
+    q_rad: np.ndarray
+    reachable: np.ndarray
+
+
+class WholeBodyIKSolution(NamedTuple):
+    """Result of :func:`whole_body_ik`.
+
+    Attributes:
+        joint_pos_rad: (N, n_joints) actuated joint angles in actuator (= Pinocchio) order.
+        reachable: (N,) True where every requested foot target was reached exactly.
+    """
+
+    joint_pos_rad: np.ndarray
+    reachable: np.ndarray
+
+
+# ---------------------------------------------------------------- geometry readers
+def _chain(robot: RobotModel, foot: str) -> tuple[list[int], list[int]]:
+    m = robot.mj_model
+    jids = [m.joint(name).id for name in robot.spec.leg_joints[foot]]
+    bids = [int(m.jnt_bodyid[j]) for j in jids]
+    for parent, child in zip([robot.trunk_body_id, *bids[:-1]], bids, strict=True):
+        if int(m.body_parentid[child]) != parent:
+            raise ValueError(f"{robot.name}/{foot}: leg bodies do not form a serial chain")
+    for j, b in zip(jids, bids, strict=True):
+        if np.any(np.abs(m.jnt_pos[j]) > _TOL_GEOMETRY):
+            raise ValueError(f"{robot.name}: joint {m.joint(j).name} is offset in its body")
+        if np.any(np.abs(m.body_quat[b] - np.array([1.0, 0, 0, 0])) > _TOL_GEOMETRY):
+            raise ValueError(f"{robot.name}: body {m.body(b).name} is rotated")
+    return jids, bids
+
+
+def _check_axes(robot: RobotModel, jids: list[int], axes: list[int]) -> None:
+    m = robot.mj_model
+    for j, k in zip(jids, axes, strict=True):
+        expected = np.eye(3)[k]
+        if np.any(np.abs(m.jnt_axis[j] - expected) > _TOL_GEOMETRY):
+            raise ValueError(f"{robot.name}: joint {m.joint(j).name} axis is not {expected}")
+
+
+def _downward_length(pos: np.ndarray, what: str) -> float:
+    if abs(pos[0]) > _TOL_GEOMETRY or abs(pos[1]) > _TOL_GEOMETRY or pos[2] >= 0.0:
+        raise ValueError(f"{what} must lie straight below its parent joint, got {pos}")
+    return float(-pos[2])
+
+
+def leg_geometry(robot: RobotModel, foot: str) -> LegGeometry:
+    """Read the 5-DoF leg geometry of ``foot`` from the robot's MJCF (see module docstring).
+
+    Raises:
+        ValueError: if the MJCF leg does not have the yaw-roll-pitch-pitch-pitch structure
+            assumed by the closed form (non-zero joint offsets, rotated bodies, other axes).
+    """
+    if robot.spec.planar:
+        raise ValueError(f"{robot.name} is planar; use planar_leg_geometry")
+    m = robot.mj_model
+    jids, bids = _chain(robot, foot)
+    _check_axes(robot, jids, [2, 0, 1, 1, 1])
+    site = robot.foot_site_ids[foot]
+    if int(m.site_bodyid[site]) != bids[4]:
+        raise ValueError(f"{robot.name}: foot site is not on the ankle body")
+    if abs(m.site_pos[site][1]) > _TOL_GEOMETRY:
+        raise ValueError(f"{robot.name}: foot site must lie in the foot's x-z plane")
+    return LegGeometry(
+        foot=foot,
+        p_yaw_trunk_m=np.array(m.body_pos[bids[0]], dtype=float),
+        p_roll_yaw_m=np.array(m.body_pos[bids[1]], dtype=float),
+        p_pitch_roll_m=np.array(m.body_pos[bids[2]], dtype=float),
+        thigh_m=_downward_length(m.body_pos[bids[3]], "knee"),
+        shank_m=_downward_length(m.body_pos[bids[4]], "ankle"),
+        p_foot_ankle_m=np.array(m.site_pos[site], dtype=float),
+        lower_rad=np.array(robot.joint_lower_rad[robot.leg_joint_index[foot]], dtype=float),
+        upper_rad=np.array(robot.joint_upper_rad[robot.leg_joint_index[foot]], dtype=float),
+    )
+
+
+def planar_leg_geometry(robot: RobotModel, foot: str) -> PlanarLegGeometry:
+    """Read the planar 2-DoF leg geometry of ``foot`` (biped2d) from the MJCF.
+
+    Raises:
+        ValueError: if the leg is not a hip-pitch/knee chain with the foot site straight
+            below the knee.
+    """
+    if not robot.spec.planar:
+        raise ValueError(f"{robot.name} is not planar; use leg_geometry")
+    m = robot.mj_model
+    jids, bids = _chain(robot, foot)
+    _check_axes(robot, jids, [1, 1])
+    site = robot.foot_site_ids[foot]
+    if int(m.site_bodyid[site]) != bids[1]:
+        raise ValueError(f"{robot.name}: foot site is not on the shank body")
+    p_hip = np.array(m.body_pos[bids[0]], dtype=float)
+    return PlanarLegGeometry(
+        foot=foot,
+        p_hip_trunk_xz_m=p_hip[[0, 2]],
+        thigh_m=_downward_length(m.body_pos[bids[1]], "knee"),
+        shank_m=_downward_length(m.site_pos[site], "foot site"),
+        lower_rad=np.array(robot.joint_lower_rad[robot.leg_joint_index[foot]], dtype=float),
+        upper_rad=np.array(robot.joint_upper_rad[robot.leg_joint_index[foot]], dtype=float),
+    )
+
+
+# ------------------------------------------------------------------------- helpers
+def _two_link_ik(
+    bx_m: np.ndarray,
+    bz_m: np.ndarray,
+    thigh_m: float,
+    shank_m: float,
+    knee_lim: tuple[float, float],
+    q_raw: np.ndarray,
+    col: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Planar hip-pitch/knee IK (eqs. 34-35, 40) for ``b = -a``, ``a`` the end point in the
+    hip x-z plane, FK ``a = -(l1 sin q_h + l2 sin(q_h + q_k), l1 cos q_h + l2 cos(q_h + q_k))``.
+
+    Writes the unclipped hip and knee angles into ``q_raw[:, col]`` and ``q_raw[:, col + 1]``
+    and returns ``(q_hip_raw, q_knee, cos_knee)`` with the knee clipped to its limits and the
+    hip computed from the clipped knee (nearest feasible solution); ``|cos_knee| > 1`` means
+    out of reach. ``q_hip = atan2(b_x, b_z) - atan2(l2 sin q_k, l1 + l2 cos q_k)`` is
+    evaluated as one ``atan2`` of the rotated vector, so it lies in ``(-pi, pi]``.
+    """
+    inv = 1.0 / (2.0 * thigh_m * shank_m)
+    cos_knee = (bx_m * bx_m + bz_m * bz_m) * inv - (thigh_m**2 + shank_m**2) * inv  # (N,)
+    q_knee_raw = np.arccos(np.minimum(np.maximum(cos_knee, -1.0), 1.0))
+    q_raw[:, col + 1] = q_knee_raw
+    q_knee = np.minimum(np.maximum(q_knee_raw, knee_lim[0]), knee_lim[1])
+    u = shank_m * np.sin(q_knee)  # l2 sin q_k
+    w = thigh_m + shank_m * np.cos(q_knee)  # l1 + l2 cos q_k
+    q_hip_raw = np.arctan2(bx_m * w - bz_m * u, bz_m * w + bx_m * u)
+    q_raw[:, col] = q_hip_raw
+    return q_hip_raw, q_knee, cos_knee
+
+
+def _as_batch(
+    p_foot_world_m: np.ndarray, p_trunk_world_m: np.ndarray, rot_trunk_world: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    p_f = np.asarray(p_foot_world_m, dtype=float).reshape(-1, 3)
+    p_b = np.asarray(p_trunk_world_m, dtype=float).reshape(-1, 3)
+    rot = np.asarray(rot_trunk_world, dtype=float).reshape(-1, 3, 3)
+    n = max(p_f.shape[0], p_b.shape[0], rot.shape[0])
+    if p_f.shape[0] != n:
+        p_f = np.broadcast_to(p_f, (n, 3))
+    if p_b.shape[0] != n:
+        p_b = np.broadcast_to(p_b, (n, 3))
+    if rot.shape[0] != n:
+        rot = np.broadcast_to(rot, (n, 3, 3))
+    return p_f, p_b, rot
+
+
+def trunk_yaw_rad(rot_trunk_world: np.ndarray) -> np.ndarray:
+    """Heading of the trunk x axis, ``atan2(R[1,0], R[0,0])`` (ZYX yaw), (N,) from (N,3,3)."""
+    rot = np.asarray(rot_trunk_world, dtype=float).reshape(-1, 3, 3)
+    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
+
+
+# ---------------------------------------------------------------------- 5-DoF leg IK
+def leg_ik(
+    geom: LegGeometry,
+    p_foot_world_m: np.ndarray,
+    p_trunk_world_m: np.ndarray,
+    rot_trunk_world: np.ndarray,
+    foot_yaw_rad: np.ndarray | float | None = None,
+    tol: float = 1e-9,
+) -> LegIKSolution:
+    """Analytic 5-DoF leg IK (Appendix B, eqs. 31-40; derivation in the module docstring).
+
+    Args:
+        geom: leg geometry from :func:`leg_geometry`.
+        p_foot_world_m: desired foothold (foot-centre site) positions (N, 3) or (3,) [m].
+        p_trunk_world_m: trunk (root joint frame) positions (N, 3) or (3,) [m].
+        rot_trunk_world: trunk rotation matrices world<-trunk (N, 3, 3) or (3, 3).
+        foot_yaw_rad: desired world heading of the foot axis (N,) or scalar [rad]; None
+            (default) keeps the foot aligned with the trunk heading, i.e. ``q0 = 0`` (eq. 31).
+        tol: tolerance [m, rad, or on the knee cosine] before a target counts as
+            unreachable or a joint as past its limit.
+
+    Returns:
+        :class:`LegIKSolution` with ``q_rad`` (N, 5) ``[yaw, roll, pitch, knee, ankle]`` and
+        ``reachable`` (N,).
+    """
+    p_f, p_b, rot = _as_batch(p_foot_world_m, p_trunk_world_m, rot_trunk_world)
+    n = p_f.shape[0]
+    lo, hi = geom.lower_rad, geom.upper_rad
+    q_raw = np.empty((n, 5))  # unclipped joint angles
+
+    # eqs. 36-37: target in the trunk frame, p^B = R^T (p_f - p_B), relative to the yaw joint
+    p_trunk = ((p_f - p_b)[:, None, :] @ rot)[:, 0, :] - geom.p_yaw_trunk_m  # (N, 3)
+    up_trunk = rot[:, 2, :]  # world z in the trunk frame (N, 3)
+
+    # eq. 31: hip yaw from the desired foot heading
+    if foot_yaw_rad is None:
+        q_raw[:, 0] = 0.0
+        x_yaw, y_yaw, z_yaw = p_trunk.T
+        gx, gy, gz = up_trunk.T
+    else:
+        dpsi = np.asarray(foot_yaw_rad, dtype=float) - np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
+        q_raw[:, 0] = np.arctan2(np.sin(dpsi), np.cos(dpsi))  # wrapped to (-pi, pi]
+        q0 = np.minimum(np.maximum(q_raw[:, 0], lo[0]), hi[0])
+        c0, s0 = np.cos(q0), np.sin(q0)
+        x_yaw = c0 * p_trunk[:, 0] + s0 * p_trunk[:, 1]
+        y_yaw = c0 * p_trunk[:, 1] - s0 * p_trunk[:, 0]
+        z_yaw = p_trunk[:, 2]
+        gx = c0 * up_trunk[:, 0] + s0 * up_trunk[:, 1]
+        gy = c0 * up_trunk[:, 1] - s0 * up_trunk[:, 0]
+        gz = up_trunk[:, 2]
+
+    # eq. 36: roll joint -> target in the yaw link (N,) each
+    r1y = y_yaw - geom.p_roll_yaw_m[1]
+    r1z = z_yaw - geom.p_roll_yaw_m[2]
+
+    # eqs. 33, 38: cos(q1) r1y + sin(q1) r1z = w = r_{21,y}, i.e.
+    # q1 = atan2(r1z, r1y) + arccos(w / rho), evaluated as one atan2 (no wrapping needed)
+    w = geom.p_pitch_roll_m[1]
+    excess = r1y * r1y + r1z * r1z - w * w  # rho^2 - w^2, < 0: unreachable
+    root = np.sqrt(np.maximum(excess, 0.0))
+    q_raw[:, 1] = np.arctan2(r1z * w + r1y * root, r1y * w - r1z * root)
+    q1 = np.minimum(np.maximum(q_raw[:, 1], lo[1]), hi[1])
+    c1, s1 = np.cos(q1), np.sin(q1)
+
+    # eq. 32 generalised: foot axis Rx(q1) Ry(theta) e_x orthogonal to world up
+    theta = np.arctan2(gx, gz * c1 - gy * s1)
+    ct, st = np.cos(theta), np.sin(theta)
+
+    # roll-link x-z plane relative to the hip pitch joint, foot offset removed; b = -ankle
+    cx, cz = geom.p_foot_ankle_m[0], geom.p_foot_ankle_m[2]
+    bx = (geom.p_pitch_roll_m[0] + geom.p_roll_yaw_m[0] - x_yaw) + (cx * ct + cz * st)
+    bz = (s1 * r1y - c1 * r1z + geom.p_pitch_roll_m[2]) + (cz * ct - cx * st)
+
+    # eqs. 34, 35, 40: planar hip pitch / knee (hip from the clipped knee)
+    q2_raw, q3, cos_knee = _two_link_ik(
+        bx, bz, geom.thigh_m, geom.shank_m, (lo[3], hi[3]), q_raw, 2
+    )
+    q2 = np.minimum(np.maximum(q2_raw, lo[2]), hi[2])
+    # eq. 32: ankle pitch levels the foot (from the clipped hip and knee), wrapped
+    q4 = theta - q2 - q3
+    q_raw[:, 4] = np.arctan2(np.sin(q4), np.cos(q4))
+
+    q = np.minimum(np.maximum(q_raw, lo), hi)  # (N, 5)
+    reachable = (
+        (np.abs(q_raw - q).max(axis=1) <= tol) & (np.abs(cos_knee) <= 1.0 + tol) & (excess >= 0.0)
+    )
+    return LegIKSolution(q, reachable)
+
+
+# ---------------------------------------------------------------------- planar leg IK
+def planar_leg_ik(
+    geom: PlanarLegGeometry,
+    p_foot_xz_m: np.ndarray,
+    p_trunk_xz_m: np.ndarray,
+    trunk_pitch_rad: np.ndarray | float,
+    tol: float = 1e-9,
+) -> LegIKSolution:
+    """Analytic IK of the planar biped leg (eqs. 34-35, 40 in the sagittal plane).
+
+    The trunk rotation is ``Ry(pitch)`` (root hinge about ``y``), so a world vector
+    ``(x, z)`` is ``(c x - s z, s x + c z)`` in the trunk frame.
+
+    Args:
+        geom: from :func:`planar_leg_geometry`.
+        p_foot_xz_m: desired foot-point positions (N, 2) or (2,) as world (x, z) [m].
+        p_trunk_xz_m: trunk positions (N, 2) or (2,) as world (x, z) [m].
+        trunk_pitch_rad: trunk pitch (N,) or scalar [rad].
+        tol: tolerance before a target counts as unreachable / past a limit.
+
+    Returns:
+        :class:`LegIKSolution` with ``q_rad`` (N, 2) ``[hip_pitch, knee]`` (knee flexion
+        positive) and ``reachable`` (N,).
+    """
+    d = np.asarray(p_foot_xz_m, dtype=float).reshape(-1, 2) - np.asarray(
+        p_trunk_xz_m, dtype=float
+    ).reshape(-1, 2)  # (N, 2)
+    pitch = np.asarray(trunk_pitch_rad, dtype=float).reshape(-1)
+    c, s = np.cos(pitch), np.sin(pitch)
+    ax = c * d[:, 0] - s * d[:, 1] - geom.p_hip_trunk_xz_m[0]
+    az = s * d[:, 0] + c * d[:, 1] - geom.p_hip_trunk_xz_m[1]
+    q_raw = np.empty((ax.shape[0], 2))
+    _, _, cos_knee = _two_link_ik(
+        -ax, -az, geom.thigh_m, geom.shank_m, (geom.lower_rad[1], geom.upper_rad[1]), q_raw, 0
+    )
+    q = np.minimum(np.maximum(q_raw, geom.lower_rad), geom.upper_rad)  # (N, 2)
+    reachable = (np.abs(q_raw - q).max(axis=1) <= tol) & (np.abs(cos_knee) <= 1.0 + tol)
+    return LegIKSolution(q, reachable)
+
+
+# -------------------------------------------------------------------- whole body
+def whole_body_ik(
+    robot: RobotModel,
+    p_base_world_m: np.ndarray,
+    rot_base_world: np.ndarray,
+    p_foot_world_m: dict[str, np.ndarray],
+    foot_yaw_rad: dict[str, np.ndarray] | None = None,
+    tol: float = 1e-9,
+) -> WholeBodyIKSolution:
+    """Joint angles of the whole robot: legs by analytic IK, arms (and any leg without a
+    target) at the nominal pose (:meth:`RobotModel.nominal_joint_pos`).
+
+    Args:
+        robot: ``humanoid3d`` or ``biped2d``.
+        p_base_world_m: trunk positions (N, 3) [m] (biped: the y entry is ignored).
+        rot_base_world: trunk rotations (N, 3, 3) (biped: must be ``Ry(pitch)``, as from
+            :meth:`RobotModel.base_pose`).
+        p_foot_world_m: foot -> desired foot-centre positions (N, 3) [m].
+        foot_yaw_rad: optional foot -> desired world foot heading (N,) [rad] (humanoid only;
+            default: trunk heading, ``q0 = 0``).
+        tol: see :func:`leg_ik`.
+
+    Returns:
+        :class:`WholeBodyIKSolution`: ``joint_pos_rad`` (N, n_joints) in actuator order and
+        ``reachable`` (N,), the AND over the requested feet.
+    """
+    p_base = np.asarray(p_base_world_m, dtype=float).reshape(-1, 3)
+    rot = np.asarray(rot_base_world, dtype=float).reshape(-1, 3, 3)
+    n = max(p_base.shape[0], rot.shape[0], *(np.reshape(v, (-1, 3)).shape[0]
+                                                for v in p_foot_world_m.values()))
+    q = np.tile(robot.nominal_joint_pos(), (n, 1))  # (N, n_joints)
+    ok = np.ones(n, dtype=bool)
+    for foot, target in p_foot_world_m.items():
+        if foot not in FEET:
+            raise ValueError(f"unknown foot {foot!r}; expected one of {FEET}")
+        target = np.asarray(target, dtype=float).reshape(-1, 3)
+        if robot.spec.planar:
+            pitch = np.arctan2(rot[:, 0, 2], rot[:, 0, 0])
+            sol = planar_leg_ik(
+                planar_leg_geometry(robot, foot),
+                target[:, [0, 2]],
+                p_base[:, [0, 2]],
+                pitch,
+                tol,
+            )
+        else:
+            yaw = None if foot_yaw_rad is None else foot_yaw_rad.get(foot)
+            sol = leg_ik(leg_geometry(robot, foot), target, p_base, rot, yaw, tol)
+        q[:, robot.leg_joint_index[foot]] = sol.q_rad
+        ok &= sol.reachable
+    return WholeBodyIKSolution(q, ok)
+
+
+def pin_configuration(
+    robot: RobotModel,
+    p_base_world_m: np.ndarray,
+    rot_base_world: np.ndarray,
+    joint_pos_rad: np.ndarray,
+) -> np.ndarray:
+    """Pinocchio configurations (N, nq) from base poses and actuated joint angles.
+
+    Humanoid: ``[p (3), quat_xyzw (4), joints]``; biped: ``[x, z, pitch, joints]`` with
+    ``pitch = atan2(R[0,2], R[0,0])``.
+
+    Args:
+        robot: the robot.
+        p_base_world_m: (N, 3) trunk positions [m].
+        rot_base_world: (N, 3, 3) trunk rotations.
+        joint_pos_rad: (N, n_joints) actuated joint angles in actuator order [rad].
+    """
+    p_base = np.asarray(p_base_world_m, dtype=float).reshape(-1, 3)
+    rot = np.asarray(rot_base_world, dtype=float).reshape(-1, 3, 3)
+    joints = np.asarray(joint_pos_rad, dtype=float).reshape(-1, robot.n_joints)
+    n = max(p_base.shape[0], rot.shape[0], joints.shape[0])
+    q = np.empty((n, robot.pin_model.nq))
+    q[:, robot.n_root_q :] = joints
+    if robot.spec.planar:
+        q[:, 0] = p_base[:, 0]
+        q[:, 1] = p_base[:, 2]
+        q[:, 2] = np.arctan2(rot[:, 0, 2], rot[:, 0, 0])
+        return q
+    q[:, 0:3] = p_base
+    rots = np.broadcast_to(rot, (n, 3, 3))
+    for k in range(n):
+        q[k, 3:7] = pin.Quaternion(rots[k]).coeffs()  # (x, y, z, w)
+    return q

@@ -1,0 +1,90 @@
+"""The ``gaitnet-mpc run`` command: outputs, and clear errors on bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from gaitnet_mpc.cli import main
+
+SUMMARY_KEYS = {
+    "robot",
+    "controller",
+    "course",
+    "command",
+    "duration_s",
+    "fell",
+    "fall_time_s",
+    "distance_m",
+    "mean_speed_mps",
+    "speed_rmse_mps",
+    "footholds",
+    "foothold_violations",
+    "step_durations_s",
+    "mpc",
+    "wall_time_s",
+    "realtime_factor",
+}
+
+
+def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    rc = main(
+        [
+            "run",
+            "--robot",
+            "humanoid3d",
+            "--controller",
+            "stand",
+            "--course",
+            "flat",
+            "--duration",
+            "1.2",
+            "--push",
+            "t=0.5,fx=20,fy=0,dur=0.1",
+            "--out",
+            str(out),
+            "--no-progress",
+        ]
+    )
+    assert rc == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert SUMMARY_KEYS <= summary.keys()
+    assert summary["fell"] is False
+    assert summary["duration_s"] == pytest.approx(1.2)
+    assert summary["mpc"] is None
+    lines = (out / "log.csv").read_text().splitlines()
+    assert len(lines) == 1 + 1200
+    import imageio.v3 as iio
+
+    frames = iio.imread(out / "video.mp4")
+    assert frames.shape[0] == pytest.approx(1.2 * 30, abs=1)
+    assert frames.std() > 1.0  # not a blank image
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--controller", "nope"], "--controller: got 'nope'"),
+        (["--course", "moon"], "course"),
+        (["--course", "/nonexistent/course.json"], "course"),
+        (["--push", "t=1,fx=2"], "--push"),
+        (["--duration", "-1"], "--duration: got -1.0"),
+        (["--vx", "9"], "--vx: got 9.0"),
+        (["--payload-kg", "-2"], "payload_kg: got -2.0"),
+    ],
+)
+def test_bad_input_fails_fast_with_the_field(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc = main(["run", "--no-video", "--no-progress", "--out", str(tmp_path / "x"), *args])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+
+
+def test_unknown_robot_is_an_argparse_error() -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "--robot", "atlas"])
+    assert exc.value.code == 2

@@ -1,0 +1,466 @@
+"""Tests of gaitnet_mpc.terrain: course format, built-in courses, queries, MuJoCo geoms."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gaitnet_mpc.errors import ConfigError, CourseFormatError
+from gaitnet_mpc.terrain import (
+    BUILTIN_COURSES,
+    Course,
+    Obstacle,
+    Patch,
+    course_bounds,
+    course_geoms_xml,
+    load_course,
+)
+
+EXAMPLE_JSON = Path(__file__).resolve().parents[1] / "src/gaitnet_mpc/courses/example.json"
+
+
+def _valid_dict() -> dict[str, Any]:
+    return {
+        "name": "t",
+        "patches": [
+            {"x": [-1.0, 1.0], "y": [-0.5, 0.5], "z": 0.0, "feet": "both"},
+            {"x": [1.1, 1.4], "y": [0.0, 0.3], "z": 0.05, "feet": "left"},
+            {"x": [1.2, 1.5], "y": [-0.3, 0.0], "z": -0.02, "feet": "right"},
+            {"x": [1.6, 5.0], "y": [-0.5, 0.5], "z": 0.1},
+        ],
+        "obstacles": [{"x": [3.0, 3.1], "y": [-0.5, 0.5], "height": 0.04}],
+    }
+
+
+# ------------------------------------------------------------------------- format round trip
+
+
+def test_from_dict_defaults_and_obstacle_base() -> None:
+    c = Course.from_dict(_valid_dict())
+    assert c.name == "t"
+    assert c.patches[3].feet == "both"
+    assert c.start_xy == (0.0, 0.0)
+    (ob,) = c.obstacles
+    assert ob.z_base_m == pytest.approx(0.1)
+    assert ob.z_top_m == pytest.approx(0.14)
+    d = _valid_dict()
+    del d["obstacles"]
+    assert Course.from_dict(d).obstacles == ()
+
+
+def test_round_trip_dict_and_json(tmp_path: Path) -> None:
+    c = Course.from_dict(_valid_dict())
+    assert Course.from_dict(c.to_dict()) == c
+    assert json.loads(json.dumps(c.to_dict())) == c.to_dict()
+    path = tmp_path / "course.json"
+    c.to_json(path)
+    assert Course.from_json(path) == c
+    assert load_course(str(path)) == c
+
+
+@pytest.mark.parametrize("name", list(BUILTIN_COURSES))
+def test_round_trip_builtins(name: str, tmp_path: Path) -> None:
+    c = load_course(name)
+    assert Course.from_dict(c.to_dict()) == c
+    path = tmp_path / f"{name}.json"
+    c.to_json(path)
+    assert Course.from_json(path) == c
+
+
+def test_from_json_name_defaults_to_stem(tmp_path: Path) -> None:
+    d = _valid_dict()
+    del d["name"]
+    path = tmp_path / "my-course.json"
+    path.write_text(json.dumps(d))
+    assert Course.from_json(path).name == "my-course"
+
+
+def test_example_json_loads() -> None:
+    c = load_course(str(EXAMPLE_JSON))
+    assert c.name == "example"
+    assert {p.feet for p in c.patches} == {"both", "left", "right"}
+    assert c.obstacles[0].z_base_m == 0.0
+
+
+def test_start_xy_round_trip() -> None:
+    d = _valid_dict()
+    d["start_xy"] = [0.5, 0.1]
+    c = Course.from_dict(d)
+    assert c.start_xy == (0.5, 0.1)
+    assert Course.from_dict(c.to_dict()) == c
+
+
+def _set(path: tuple[Any, ...], value: Any) -> Callable[[dict[str, Any]], None]:
+    def mutate(d: dict[str, Any]) -> None:
+        target = d
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+
+    return mutate
+
+
+def _delete(path: tuple[Any, ...]) -> Callable[[dict[str, Any]], None]:
+    def mutate(d: dict[str, Any]) -> None:
+        target = d
+        for key in path[:-1]:
+            target = target[key]
+        del target[path[-1]]
+
+    return mutate
+
+
+BAD_INPUTS: list[tuple[str, Callable[[dict[str, Any]], None], str, str]] = [
+    ("missing patches", _delete(("patches",)), "patches", "<missing>"),
+    ("empty patches", _set(("patches",), []), "patches", "[]"),
+    ("patches not a list", _set(("patches",), "ground"), "patches", "'ground'"),
+    ("x_min == x_max", _set(("patches", 1, "x"), [1.2, 1.2]), "patches[1].x", "[1.2, 1.2]"),
+    ("x_min > x_max", _set(("patches", 2, "x"), [1.5, 1.2]), "patches[2].x", "[1.5, 1.2]"),
+    ("y_min > y_max", _set(("patches", 0, "y"), [0.5, -0.5]), "patches[0].y", "[0.5, -0.5]"),
+    ("x one number", _set(("patches", 1, "x"), 1.2), "patches[1].x", "1.2"),
+    ("x three numbers", _set(("patches", 1, "x"), [1, 2, 3]), "patches[1].x", "[1, 2, 3]"),
+    ("x string item", _set(("patches", 1, "x"), ["a", 2.0]), "patches[1].x[0]", "'a'"),
+    ("missing x", _delete(("patches", 3, "x")), "patches[3].x", "<missing>"),
+    ("non-numeric z", _set(("patches", 2, "z"), "high"), "patches[2].z", "'high'"),
+    ("bool z", _set(("patches", 2, "z"), True), "patches[2].z", "True"),
+    ("missing z", _delete(("patches", 1, "z")), "patches[1].z", "<missing>"),
+    ("NaN z", _set(("patches", 1, "z"), math.nan), "patches[1].z", "nan"),
+    ("inf x", _set(("patches", 3, "x"), [1.6, math.inf]), "patches[3].x[1]", "inf"),
+    ("bad feet", _set(("patches", 1, "feet"), "middle"), "patches[1].feet", "'middle'"),
+    ("feet not str", _set(("patches", 1, "feet"), 1), "patches[1].feet", "1"),
+    ("patch not object", _set(("patches", 1), [1, 2]), "patches[1]", "[1, 2]"),
+    ("unknown patch key", _set(("patches", 0, "colour"), "red"), "patches[0].colour", "'red'"),
+    ("unknown top key", _set(("terrain",), 3), "terrain", "3"),
+    ("bad name", _set(("name",), 7), "name", "7"),
+    ("empty name", _set(("name",), ""), "name", "''"),
+    (
+        "obstacle not on a patch",
+        _set(("obstacles", 0, "x"), [1.52, 1.58]),
+        "obstacles[0]",
+        "(1.55, 0.0)",
+    ),
+    ("obstacle zero height", _set(("obstacles", 0, "height"), 0.0), "obstacles[0].height", "0.0"),
+    ("obstacle negative height", _set(("obstacles", 0, "height"), -1), "obstacles[0].height", "-1"),
+    ("obstacle NaN y", _set(("obstacles", 0, "y"), [math.nan, 1]), "obstacles[0].y[0]", "nan"),
+    ("obstacle missing height", _delete(("obstacles", 0, "height")), "obstacles[0].height", "<m"),
+    ("obstacle unknown key", _set(("obstacles", 0, "z"), 0.1), "obstacles[0].z", "0.1"),
+    ("obstacles not list", _set(("obstacles",), {"x": 1}), "obstacles", "{'x': 1}"),
+    ("bad start_xy", _set(("start_xy",), [0.0]), "start_xy", "[0.0]"),
+    ("start in a hole", _set(("start_xy",), [1.55, 0.0]), "patches", "start point"),
+    ("start on left-only", _set(("start_xy",), [1.15, 0.1]), "patches", "start point"),
+    (
+        "no both patch at origin",
+        _set(("patches", 0, "x"), [0.2, 1.0]),
+        "patches",
+        "no patch allowing both feet",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("mutate", "field", "value_text"),
+    [pytest.param(m, f, v, id=i) for i, m, f, v in BAD_INPUTS],
+)
+def test_malformed_course_raises(
+    mutate: Callable[[dict[str, Any]], None], field: str, value_text: str
+) -> None:
+    d = copy.deepcopy(_valid_dict())
+    mutate(d)
+    with pytest.raises(CourseFormatError) as info:
+        Course.from_dict(d)
+    msg = str(info.value)
+    assert msg.startswith(f"{field}: got "), msg
+    assert value_text in msg, msg
+    assert info.value.field == field
+
+
+def test_not_a_dict_and_bad_files(tmp_path: Path) -> None:
+    with pytest.raises(CourseFormatError, match="course"):
+        Course.from_dict([1, 2])  # type: ignore[arg-type]
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(CourseFormatError, match="valid JSON"):
+        Course.from_json(bad)
+    with pytest.raises(CourseFormatError, match="readable"):
+        Course.from_json(tmp_path / "missing.json")
+
+
+def test_dataclass_validation() -> None:
+    with pytest.raises(CourseFormatError, match=r"Patch\.x_max"):
+        Patch(1.0, 0.0, 0.0, 1.0, 0.0)
+    with pytest.raises(CourseFormatError, match=r"Patch\.feet"):
+        Patch(0.0, 1.0, 0.0, 1.0, 0.0, "middle")
+    with pytest.raises(CourseFormatError, match=r"Obstacle\.height_m"):
+        Obstacle(0.0, 1.0, 0.0, 1.0, 0.0)
+    ground = Patch(-1.0, 1.0, -1.0, 1.0, 0.1)
+    with pytest.raises(CourseFormatError, match=r"obstacles\[0\]\.z_base_m"):
+        Course("c", (ground,), (Obstacle(0.0, 0.1, -1.0, 1.0, 0.05, 0.0),))
+    with pytest.raises(CourseFormatError, match="patches"):
+        Course("c", ())
+    assert Course("c", [ground]).patches == (ground,)  # lists are frozen into tuples
+
+
+# ------------------------------------------------------------------------- built-in courses
+
+
+def test_load_course_unknown_name_lists_valid_names() -> None:
+    with pytest.raises(CourseFormatError) as info:
+        load_course("moon")
+    msg = str(info.value)
+    assert msg.startswith("course: got 'moon'")
+    for name in BUILTIN_COURSES:
+        assert name in msg
+
+
+def test_load_course_bad_params() -> None:
+    with pytest.raises(CourseFormatError, match="gap parameters"):
+        load_course("gap", depth_m=1.0)
+    with pytest.raises(CourseFormatError, match=r"gap\.width_m: got -0\.1"):
+        load_course("gap", width_m=-0.1)
+    with pytest.raises(CourseFormatError, match=r"uneven\.seed"):
+        load_course("uneven", seed=-1)
+
+
+@pytest.mark.parametrize("name", list(BUILTIN_COURSES))
+def test_builtin_course_basics(name: str) -> None:
+    c = load_course(name)
+    assert c.name == name
+    k = c.patch_at(0.0, 0.0)
+    assert k is not None and c.patches[k].feet == "both"
+    assert c.foot_allowed(0.0, 0.06, "left") and c.foot_allowed(0.0, -0.06, "right")
+    final = max(c.patches, key=lambda p: p.x_max)
+    assert final.x_max >= 22.0 and final.x_min < 21.0
+    assert final.feet == "both" and final.y_min <= -0.5 and final.y_max >= 0.5
+    # A straight walk along y = 0 for 20 s at 1 m/s ends on ground.
+    assert c.ground_height_at(20.0, 0.0) is not None
+
+
+def test_flat() -> None:
+    c = load_course("flat")
+    assert c.patches == (Patch(-1.0, 25.0, -1.5, 1.5, 0.0, "both"),)
+
+
+@pytest.mark.parametrize(("width_m", "x_m"), [(0.2, 1.5), (0.35, 2.0), (0.05, 0.5)])
+def test_gap(width_m: float, x_m: float) -> None:
+    c = load_course("gap", width_m=width_m, x_m=x_m)
+    for x in np.linspace(x_m + 1e-6, x_m + width_m - 1e-6, 7):
+        assert c.ground_height_at(float(x), 0.0) is None
+        assert c.height_at(float(x), 0.0) is None
+    assert c.ground_height_at(x_m - 0.01, 0.0) == 0.0
+    assert c.ground_height_at(x_m + width_m + 0.01, 0.0) == 0.0
+
+
+def test_stepping_stones() -> None:
+    c = load_course("stepping-stones")
+    feet = {p.feet for p in c.patches}
+    assert feet == {"both", "left", "right"}
+    for p in c.patches:
+        if p.feet == "left":
+            assert p.y_min >= -1e-9 and p.y_max <= 0.3
+        if p.feet == "right":
+            assert p.y_max <= 1e-9 and p.y_min >= -0.3
+    ordered = sorted(c.patches, key=lambda p: p.x_min)
+    gaps = [b.x_min - max(p.x_max for p in ordered[: i + 1]) for i, b in enumerate(ordered[1:])]
+    assert max(gaps) >= 0.05
+    assert max(gaps) <= 0.12  # nothing wider than a long step can clear
+    stones = [p for p in c.patches if p.x_max < 20.0 and p.x_min > 0.8 - 1e-9]
+    assert 2.3 <= max(p.x_max for p in stones) - 0.8 <= 3.2
+    assert c == load_course("stepping-stones")  # deterministic
+    assert all(p.z_top_m == 0.0 for p in load_course("stepping-stones", dz_m=0.0).patches)
+
+
+def test_obstacle_course() -> None:
+    c = load_course("obstacle")
+    (ob,) = c.obstacles
+    assert ob.x_max - ob.x_min == pytest.approx(0.10)
+    assert ob.height_m == pytest.approx(0.03)
+    assert 1.4 <= ob.x_center_m <= 1.6
+    assert ob.y_min <= -0.5 and ob.y_max >= 0.5
+    assert c.height_at(1.5, 0.0) == pytest.approx(0.03)
+    assert c.ground_height_at(1.5, 0.0) == 0.0
+    assert c.ground_height_at(2.25, 0.0) is None
+    assert c.ground_height_at(2.19, 0.0) == 0.0 and c.ground_height_at(2.36, 0.0) == 0.0
+    assert c.obstacles_between(1.3, 1.7) == [ob]
+    assert c.obstacles_between(1.7, 1.3) == [ob]
+    assert c.obstacles_between(1.6, 2.0) == []
+
+
+def test_uneven() -> None:
+    c = load_course("uneven")
+    tiles = c.patches[1:-1]
+    assert len(tiles) > 20
+    assert all(-0.02 <= p.z_top_m <= 0.02 for p in tiles)
+    assert len({p.z_top_m for p in tiles}) > len(tiles) // 2
+    assert c == load_course("uneven", seed=0)
+    assert c != load_course("uneven", seed=1)
+    assert max(p.x_max for p in tiles) >= 5.9
+    # Contiguous: every point of the walkway up to the final platform is on a patch.
+    for x in np.linspace(-0.5, 7.0, 151):
+        for y in (-0.3, -0.06, 0.0, 0.06, 0.3):
+            assert c.patch_at(float(x), y) is not None
+
+
+# ------------------------------------------------------------------------- queries
+
+
+def test_patch_at_and_heights_overlap_prefers_highest() -> None:
+    low = Patch(-1.0, 1.0, -1.0, 1.0, 0.0)
+    high = Patch(0.5, 0.8, -0.2, 0.2, 0.1, "left")
+    c = Course("o", (low, high))
+    assert c.patch_at(0.0, 0.0) == 0
+    assert c.patch_at(0.6, 0.0) == 1
+    assert c.ground_height_at(0.6, 0.0) == 0.1
+    assert c.patch_at(1.5, 0.0) is None and c.height_at(1.5, 0.0) is None
+    assert c.patch_at(1.0, 1.0) == 0  # closed rectangles
+    # top surface at (0.6, 0) is the left-only patch
+    assert c.foot_allowed(0.6, 0.0, "left") and not c.foot_allowed(0.6, 0.0, "right")
+
+
+def test_foot_allowed() -> None:
+    c = Course.from_dict(_valid_dict())
+    assert c.foot_allowed(0.0, 0.0, "left") and c.foot_allowed(0.0, 0.0, "right")
+    assert c.foot_allowed(1.15, 0.1, "left") and not c.foot_allowed(1.15, 0.1, "right")
+    assert c.foot_allowed(1.45, -0.1, "right") and not c.foot_allowed(1.45, -0.1, "left")
+    assert not c.foot_allowed(1.55, 0.0, "left") and not c.foot_allowed(1.55, 0.0, "right")
+    with pytest.raises(ConfigError, match="foot"):
+        c.foot_allowed(0.0, 0.0, "both")
+
+
+def test_foothold_bounds_examples() -> None:
+    c = Course.from_dict(_valid_dict())
+    lo, hi = c.foothold_bounds((0.0, 0.0), "left")
+    np.testing.assert_allclose(lo, [-0.98, -0.48, 0.0])
+    np.testing.assert_allclose(hi, [0.98, 0.48, 0.0])
+    # CoM near the end of the platform: left foot goes to the left-only stone.
+    lo, hi = c.foothold_bounds(np.array([1.05, 0.0, 0.9]), "left")
+    np.testing.assert_allclose(lo, [1.12, 0.02, 0.05])
+    np.testing.assert_allclose(hi, [1.38, 0.28, 0.05])
+    lo, hi = c.foothold_bounds((1.15, 0.0), "right")
+    np.testing.assert_allclose(lo, [1.22, -0.28, -0.02])
+    # A huge margin collapses the range to the patch centre.
+    lo, hi = c.foothold_bounds((1.05, 0.0), "left", margin_m=0.5)
+    np.testing.assert_allclose(lo[:2], [1.25, 0.15])
+    np.testing.assert_allclose(hi[:2], [1.25, 0.15])
+    # z tolerance.
+    lo, hi = c.foothold_bounds((0.0, 0.0), "left", z_tol_m=0.001)
+    assert lo[2] == pytest.approx(-0.001) and hi[2] == pytest.approx(0.001)
+    # Nothing triggers far past the end: wide bounds around the CoM at the nearest top.
+    lo, hi = c.foothold_bounds((8.0, 0.2), "right")
+    np.testing.assert_allclose(lo, [7.0, -0.8, 0.1])
+    np.testing.assert_allclose(hi, [9.0, 1.2, 0.1])
+    assert c.foothold_patch((8.0, 0.2), "right") is None
+    with pytest.raises(ConfigError, match="p_com_xy"):
+        c.foothold_bounds((math.nan, 0.0), "left")
+
+
+def test_foothold_bounds_avoid_obstacle() -> None:
+    c = load_course("obstacle")
+    ob = c.obstacles[0]
+    for x_c in np.linspace(0.8, 2.0, 25):
+        lo, hi = c.foothold_bounds((float(x_c), 0.0), "left")
+        assert hi[0] <= ob.x_min - 0.02 + 1e-9 or lo[0] >= ob.x_max + 0.02 - 1e-9
+    lo, _ = c.foothold_bounds((1.5, 0.0), "left")
+    assert lo[0] == pytest.approx(ob.x_max + 0.02)
+
+
+def test_stepping_stones_foothold_sequence_uses_lanes() -> None:
+    c = load_course("stepping-stones")
+    used = set()
+    for x_c in np.arange(0.0, 3.6, 0.05):
+        for foot in ("left", "right"):
+            k = c.foothold_patch((float(x_c), 0.0), foot)
+            assert k is not None
+            assert c.patches[k].feet in ("both", foot)
+            used.add(k)
+    assert used == set(range(len(c.patches)))  # every stone is the target at some point
+
+
+COURSES = {name: load_course(name) for name in BUILTIN_COURSES} | {
+    "custom": Course.from_dict(_valid_dict())
+}
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    name=st.sampled_from(sorted(COURSES)),
+    x_c=st.floats(-1.5, 26.0),
+    y_c=st.floats(-0.4, 0.4),
+    foot=st.sampled_from(["left", "right"]),
+    margin_m=st.floats(0.0, 0.1),
+)
+def test_foothold_bounds_inside_triggered_patch(
+    name: str, x_c: float, y_c: float, foot: str, margin_m: float
+) -> None:
+    c = COURSES[name]
+    lo, hi = c.foothold_bounds((x_c, y_c), foot, margin_m=margin_m)
+    assert lo.shape == (3,) and hi.shape == (3,)
+    assert np.all(lo <= hi + 1e-12)
+    k = c.foothold_patch((x_c, y_c), foot)
+    if k is None:
+        np.testing.assert_allclose(hi[:2] - lo[:2], [2.0, 2.0])
+        return
+    p = c.patches[k]
+    assert p.allows(foot)
+    assert p.x_min - 0.35 <= x_c <= p.x_max + 0.15  # trigger window
+    assert p.x_min <= lo[0] and hi[0] <= p.x_max
+    assert p.y_min <= lo[1] and hi[1] <= p.y_max
+    assert lo[2] == hi[2] == p.z_top_m
+    if p.x_max - p.x_min >= 2 * margin_m:
+        assert lo[0] >= p.x_min + margin_m - 1e-12 and hi[0] <= p.x_max - margin_m + 1e-12
+    for x in (lo[0], hi[0], 0.5 * (lo[0] + hi[0])):
+        for y in (lo[1], hi[1]):
+            if c.ground_height_at(float(x), float(y)) == p.z_top_m:
+                assert c.foot_allowed(float(x), float(y), foot)
+
+
+# ------------------------------------------------------------------------- MuJoCo geometry
+
+
+@pytest.mark.parametrize("name", [*BUILTIN_COURSES, "custom"])
+def test_geoms_xml_parses_with_right_tops(name: str) -> None:
+    c = COURSES[name]
+    xml = course_geoms_xml(c, thickness_m=0.4)
+    model = mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{xml}</worldbody></mujoco>")
+    assert model.ngeom == len(c.patches) + len(c.obstacles)
+    for i, p in enumerate(c.patches):
+        gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"patch_{i}")
+        assert gid >= 0
+        assert model.geom_type[gid] == mujoco.mjtGeom.mjGEOM_BOX
+        top = model.geom_pos[gid][2] + model.geom_size[gid][2]
+        assert top == pytest.approx(p.z_top_m, abs=1e-7)
+        assert 2 * model.geom_size[gid][2] == pytest.approx(0.4)
+        assert model.geom_pos[gid][0] - model.geom_size[gid][0] == pytest.approx(p.x_min)
+        assert model.geom_pos[gid][1] + model.geom_size[gid][1] == pytest.approx(p.y_max)
+    for i, ob in enumerate(c.obstacles):
+        gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"obstacle_{i}")
+        top = model.geom_pos[gid][2] + model.geom_size[gid][2]
+        bottom = model.geom_pos[gid][2] - model.geom_size[gid][2]
+        assert top == pytest.approx(ob.z_top_m, abs=1e-7)
+        assert bottom == pytest.approx(ob.z_base_m, abs=1e-7)
+
+
+def test_geom_colours_follow_feet() -> None:
+    c = Course.from_dict(_valid_dict())
+    xml = course_geoms_xml(c)
+    model = mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{xml}</worldbody></mujoco>")
+    rgba = {p.feet: model.geom_rgba[i] for i, p in enumerate(c.patches)}
+    assert rgba["both"][1] > rgba["both"][0]  # green
+    assert rgba["left"][2] > rgba["left"][0]  # blue
+    assert rgba["right"][0] > rgba["right"][2]  # red
+    with pytest.raises(ConfigError, match="thickness_m"):
+        course_geoms_xml(c, thickness_m=0.0)
+
+
+def test_course_bounds() -> None:
+    assert course_bounds(load_course("flat")) == (-1.0, 25.0, -1.5, 1.5)
+    assert course_bounds(Course.from_dict(_valid_dict())) == (-1.0, 5.0, -0.5, 0.5)
