@@ -10,8 +10,8 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null || { echo "need $(PYTHON)"; exit 1; }
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	@if ! dpkg -s libegl1 libgl1 libosmesa6 >/dev/null 2>&1; then \
-		(apt-get update -qq && apt-get install -y -qq libegl1 libgl1 libosmesa6 libegl-mesa0 >/dev/null) \
+	@if ! dpkg -s libegl1 libegl-mesa0 libgl1 >/dev/null 2>&1; then \
+		(apt-get update -qq && apt-get install -y -qq libegl1 libegl-mesa0 libgl1 >/dev/null) \
 		|| echo "warning: could not install Mesa EGL packages; video rendering may fail"; fi
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e ".[dev]"
@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller stand --course flat \
-		--duration 10 --push t=3,fx=50,fy=0,dur=0.1 --out runs/demo
+		--duration 10 --push t=3,fx=40,fy=0,dur=0.1 --out runs/demo
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
