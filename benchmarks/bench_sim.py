@@ -13,12 +13,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from machine import machine_info  # noqa: E402
-
-from gaitnet_mpc.control.stand import StandController  # noqa: E402
-from gaitnet_mpc.robots import load_robot  # noqa: E402
-from gaitnet_mpc.sim.simulator import Simulator  # noqa: E402
-from gaitnet_mpc.terrain import load_course  # noqa: E402
+from gaitnet_mpc.control.stand import StandController
+from gaitnet_mpc.robots import load_robot
+from gaitnet_mpc.sim.simulator import Simulator
+from gaitnet_mpc.terrain import load_course
+from machine import machine_info
 
 SIM_SECONDS = 2.0
 REPEATS = 3

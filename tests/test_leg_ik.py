@@ -193,9 +193,9 @@ def test_round_trip_mujoco(humanoid: RobotModel, foot: str) -> None:
     left=st.booleans(),
 )
 def test_round_trip_property(
-    u: list[float], roll: float, pitch: float, yaw: float, left: bool
+    humanoid: RobotModel, u: list[float], roll: float, pitch: float, yaw: float, left: bool
 ) -> None:
-    robot = load_robot("humanoid3d")
+    robot = humanoid
     foot = "left" if left else "right"
     data = robot.pin_model.createData()
     p_base, rot_base = np.array([0.3, -0.2, 0.6]), pin.rpy.rpyToMatrix(roll, pitch, yaw)
@@ -220,7 +220,7 @@ def test_foot_yaw_sets_world_heading_for_level_trunk(humanoid: RobotModel) -> No
         rot = pin.rpy.rpyToMatrix(0.0, 0.0, trunk_yaw)
         p_base = np.array([0.0, 0.0, 0.55])
         foot_yaw = trunk_yaw + rng.uniform(-0.5, 0.5)
-        target = p_base + rot @ np.array([rng.uniform(-0.1, 0.1), 0.07, -0.48])
+        target = p_base + rot @ np.array([rng.uniform(-0.1, 0.1), 0.07, -0.6])
         sol = leg_ik(geom, target, p_base, rot, foot_yaw)
         assert sol.reachable[0]
         joints = humanoid.nominal_joint_pos()
@@ -251,17 +251,18 @@ def _assert_feasible_output(geom: LegGeometry, q: np.ndarray) -> None:
 def test_unreachable_targets_are_flagged(humanoid: RobotModel, foot: str) -> None:
     geom = leg_geometry(humanoid, foot)
     hip = geom.p_yaw_trunk_m + geom.p_roll_yaw_m  # roll joint, level trunk at the origin
-    targets = np.array(
+    offsets = np.array(
         [
-            hip + [0.0, 0.0, -1.0],  # 1 m below the hip: too far
-            hip + [0.0, 0.0, 0.3],  # above the hip
-            hip + [0.0, 0.0, -0.1],  # too close (knee limit)
-            hip + [0.6, 0.0, 0.0],  # too far forward
-            hip + [0.0, 0.0, 0.0],  # on the roll axis
-            hip + [0.0, 0.0, -0.03],  # inside the r_{21,y} offset cylinder
-            hip + [0.0, np.sign(geom.p_pitch_roll_m[1]) * -0.4, -0.3],  # roll past its limit
+            [0.0, 0.0, -1.0],  # 1 m below the hip: too far
+            [0.0, 0.0, 0.3],  # above the hip
+            [0.0, 0.0, -0.1],  # too close (knee limit)
+            [0.6, 0.0, 0.0],  # too far forward
+            [0.0, 0.0, 0.0],  # on the roll axis
+            [0.0, 0.0, -0.03],  # inside the r_{21,y} offset cylinder
+            [0.0, np.sign(geom.p_pitch_roll_m[1]) * -0.4, -0.3],  # roll past its limit
         ]
     )
+    targets = hip + offsets  # (7, 3)
     sol = leg_ik(geom, targets, np.zeros(3), np.eye(3))
     assert not sol.reachable.any()
     _assert_feasible_output(geom, sol.q_rad)
@@ -273,38 +274,70 @@ def test_unreachable_targets_are_flagged(humanoid: RobotModel, foot: str) -> Non
 def test_too_far_target_returns_straight_leg_towards_it(humanoid: RobotModel) -> None:
     geom = leg_geometry(humanoid, "left")
     hip = geom.p_yaw_trunk_m + geom.p_roll_yaw_m + [0.0, geom.p_pitch_roll_m[1], 0.0]
-    foot_offset = [geom.p_foot_ankle_m[0], 0.0, 0.0]
-    sol = leg_ik(geom, hip + foot_offset + [0.0, 0.0, -1.0], np.zeros(3), np.eye(3))
+    offset = np.array([geom.p_foot_ankle_m[0], 0.0, -1.0])  # straight below, 1 m
+    sol = leg_ik(geom, hip + offset, np.zeros(3), np.eye(3))
     assert not sol.reachable[0]
     np.testing.assert_allclose(sol.q_rad[0], np.zeros(5), atol=1e-12)
 
 
 @settings(max_examples=300, deadline=None)
 @given(
-    target=st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    target=st.tuples(st.floats(-0.3, 0.3), st.floats(-0.2, 0.3), st.floats(-0.7, -0.1)),
     roll=st.floats(-MAX_TILT_RAD, MAX_TILT_RAD),
     pitch=st.floats(-MAX_TILT_RAD, MAX_TILT_RAD),
     foot_yaw=st.one_of(st.none(), st.floats(-4.0, 4.0)),
     left=st.booleans(),
 )
 def test_any_target_gives_finite_angles_and_honest_flag(
-    target: list[float], roll: float, pitch: float, foot_yaw: float | None, left: bool
+    humanoid: RobotModel,
+    target: tuple[float, float, float],
+    roll: float,
+    pitch: float,
+    foot_yaw: float | None,
+    left: bool,
 ) -> None:
     """Any target: finite angles within limits; ``reachable`` implies an exact solution."""
-    robot = load_robot("humanoid3d")
     foot = "left" if left else "right"
-    geom = leg_geometry(robot, foot)
+    side = 1.0 if left else -1.0
     rot = pin.rpy.rpyToMatrix(roll, pitch, 0.4)
     p_base = np.array([0.1, 0.0, 0.5])
-    sol = leg_ik(geom, np.array(target) + p_base, p_base, rot, foot_yaw)
+    p_target = p_base + rot @ (np.array(target) * [1.0, side, 1.0])
+    _check_any_targets(humanoid, foot, p_target[None], p_base, rot, foot_yaw)
+
+
+def _check_any_targets(
+    robot: RobotModel,
+    foot: str,
+    p_target: np.ndarray,
+    p_base: np.ndarray,
+    rot: np.ndarray,
+    foot_yaw: float | None,
+) -> None:
+    geom = leg_geometry(robot, foot)
+    sol = leg_ik(geom, p_target, p_base, rot, foot_yaw)
     _assert_feasible_output(geom, sol.q_rad)
-    if sol.reachable[0]:
+    data = robot.pin_model.createData()
+    for k in np.flatnonzero(sol.reachable):
         joints = robot.nominal_joint_pos()
-        joints[robot.leg_joint_index[foot]] = sol.q_rad[0]
+        joints[robot.leg_joint_index[foot]] = sol.q_rad[k]
         q = pin_configuration(robot, p_base, rot, joints)[0]
-        p_foot, rot_foot = _foot_fk(robot, robot.pin_model.createData(), foot, q)
-        assert np.linalg.norm(p_foot - np.array(target) - p_base) < POS_TOL_M
+        p_foot, rot_foot = _foot_fk(robot, data, foot, q)
+        assert np.linalg.norm(p_foot - p_target[k]) < POS_TOL_M
         assert abs(rot_foot[2, 0]) < ROT_TOL
+
+
+@pytest.mark.parametrize("foot", FEET)
+def test_random_box_targets(humanoid: RobotModel, foot: str) -> None:
+    """20000 targets in a box around the hip: ~16 % reachable, all exact, none NaN."""
+    rng = np.random.default_rng(8)
+    rot = pin.rpy.rpyToMatrix(0.1, -0.2, 1.0)
+    p_base = np.array([0.0, 0.0, 0.5])
+    side = 1.0 if foot == "left" else -1.0
+    local = rng.uniform([-0.3, -0.2, -0.7], [0.3, 0.3, -0.1], (20000, 3)) * [1.0, side, 1.0]
+    p_target = p_base + local @ rot.T
+    geom = leg_geometry(humanoid, foot)
+    assert leg_ik(geom, p_target, p_base, rot).reachable.mean() > 0.1
+    _check_any_targets(humanoid, foot, p_target, p_base, rot, None)
 
 
 # ------------------------------------------------------------------------ planar biped
@@ -363,7 +396,9 @@ def test_whole_body_ik_recovers_standing_pose(name: str) -> None:
     sol = whole_body_ik(robot, np.tile(p_base, (3, 1)), np.tile(rot_base, (3, 1, 1)), targets)
     assert sol.joint_pos_rad.shape == (3, robot.n_joints)
     assert sol.reachable.all()
-    np.testing.assert_allclose(sol.joint_pos_rad, np.tile(robot.nominal_joint_pos(), (3, 1)), atol=1e-9)
+    np.testing.assert_allclose(
+        sol.joint_pos_rad, np.tile(robot.nominal_joint_pos(), (3, 1)), atol=1e-9
+    )
     q = pin_configuration(robot, p_base, rot_base, sol.joint_pos_rad[0])[0]
     q_expected, _ = robot.mj_to_pin(qpos, np.zeros(m.nv))
     np.testing.assert_allclose(q, q_expected, atol=1e-12)

@@ -29,7 +29,18 @@ def _stand(ctx: ControllerContext) -> Controller:
     return StandController(ctx.robot)
 
 
-CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {"stand": _stand}
+def _srbm(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig, SRBMWalkController
+
+    dt_s = ctx.options.get("dt_s")
+    config = SRBMWalkConfig() if dt_s is None else SRBMWalkConfig(dt_s=dt_s)
+    return SRBMWalkController(ctx.robot, ctx.course, ctx.command, config)
+
+
+CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
+    "stand": _stand,
+    "srbm": _srbm,
+}
 
 
 def make_controller(name: str, ctx: ControllerContext) -> Controller:

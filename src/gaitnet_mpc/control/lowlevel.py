@@ -1,0 +1,112 @@
+"""Low-level control: MPC wrenches and swing targets -> saturated joint torques.
+
+* Stance legs: ``tau = -J_c^T [f; m]`` restricted to the leg joints (the ground wrench
+  ``[f; m]`` acts on the foot, world-aligned, about the foot centre), plus light damping.
+* Swing legs: joint PD to the analytic IK of the swing-foot trajectory, with the joint-rate
+  target from the IK of the trajectory a moment later, plus gravity compensation.
+* Arms: PD to the nominal pose with a counter-swing opposite to the hips.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from gaitnet_mpc.kinematics.leg_ik import whole_body_ik
+from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.sim.state import RobotState
+
+
+@dataclass(frozen=True)
+class LowLevelConfig:
+    """Gains of the low-level controller."""
+
+    swing_kp_nm_per_rad: float = 60.0
+    swing_kd_nms_per_rad: float = 2.0
+    stance_kd_nms_per_rad: float = 0.3
+    arm_kp_nm_per_rad: float = 20.0
+    arm_kd_nms_per_rad: float = 0.5
+    arm_counter_swing: float = 0.6
+    ik_lookahead_s: float = 0.005
+
+
+class LowLevelController:
+    """Maps stance wrenches and swing-foot targets to joint torques for one robot."""
+
+    def __init__(self, robot: RobotModel, config: LowLevelConfig | None = None) -> None:
+        self.robot = robot
+        self.config = config or LowLevelConfig()
+        self.data = robot.pin_model.createData()
+        self.q_nominal = robot.nominal_joint_pos()
+        names = robot.joint_names
+        self.arm_index = np.array(
+            [i for i, n in enumerate(names) if any(n in robot.spec.arm_joints[f] for f in FEET)]
+            if robot.spec.arm_joints
+            else [],
+            dtype=int,
+        )
+        self.shoulder_pitch = {
+            f: names.index(f"{f}_shoulder_pitch") for f in FEET if robot.spec.arm_joints
+        }
+        self.hip_pitch = {f: names.index(f"{f}_hip_pitch") for f in FEET}
+
+    def torques(
+        self,
+        state: RobotState,
+        stance_wrench: dict[str, np.ndarray],
+        swing_target: dict[str, tuple[np.ndarray, np.ndarray]],
+    ) -> np.ndarray:
+        """Joint torques (n_joints,).
+
+        Args:
+            state: measured state.
+            stance_wrench: stance foot -> ground wrench (6,) [N; N m].
+            swing_target: swing foot -> (position (3,), velocity (3,)) of the foot centre.
+        """
+        r, c = self.robot, self.config
+        model, data = r.pin_model, self.data
+        q, _ = r.mj_to_pin(state.qpos, state.qvel)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        gravity = pin.computeGeneralizedGravity(model, data, q)[r.n_root_dofs :]
+        tau = np.zeros(r.n_joints)
+        qj, qdj = state.joint_pos_rad, state.joint_vel_radps
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        for foot, wrench in stance_wrench.items():
+            idx = r.leg_joint_index[foot]
+            jac = pin.getFrameJacobian(model, data, r.pin_foot_frame_ids[foot], lwa)
+            tau[idx] = -(jac.T @ wrench)[r.n_root_dofs :][idx] - c.stance_kd_nms_per_rad * qdj[idx]
+        if swing_target:
+            p_base, rot = r.base_pose(state.qpos)
+            v_base = state.base_lin_vel_world_mps
+            dt = c.ik_lookahead_s
+            feet = list(swing_target)
+            targets = {
+                f: np.stack([swing_target[f][0], swing_target[f][0] + dt * swing_target[f][1]])
+                for f in feet
+            }
+            base_next = np.stack([p_base, p_base + dt * v_base])
+            sol = whole_body_ik(r, base_next, np.stack([rot, rot]), targets)
+            for foot in feet:
+                idx = r.leg_joint_index[foot]
+                q_des = sol.joint_pos_rad[0, idx]
+                qd_des = (sol.joint_pos_rad[1, idx] - q_des) / dt
+                tau[idx] = (
+                    c.swing_kp_nm_per_rad * (q_des - qj[idx])
+                    + c.swing_kd_nms_per_rad * (qd_des - qdj[idx])
+                    + gravity[idx]
+                )
+        if self.arm_index.size:
+            q_arm = self.q_nominal.copy()
+            for side, other in (("left", "right"), ("right", "left")):
+                swing = qj[self.hip_pitch[other]] - self.q_nominal[self.hip_pitch[other]]
+                q_arm[self.shoulder_pitch[side]] += c.arm_counter_swing * swing
+            idx = self.arm_index
+            tau[idx] = (
+                c.arm_kp_nm_per_rad * (q_arm[idx] - qj[idx])
+                - c.arm_kd_nms_per_rad * qdj[idx]
+                + gravity[idx]
+            )
+        return np.clip(tau, -r.torque_limit_nm, r.torque_limit_nm)
