@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from gaitnet_mpc.kinematics.leg_ik import whole_body_ik
+from gaitnet_mpc.kinematics.leg_ik import leg_geometries, whole_body_ik
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
 
@@ -39,6 +39,7 @@ class LowLevelController:
         self.robot = robot
         self.config = config or LowLevelConfig()
         self.data = robot.pin_model.createData()
+        self.geometries = leg_geometries(robot)
         self.q_nominal = robot.nominal_joint_pos()
         names = robot.joint_names
         self.arm_index = np.array(
@@ -88,7 +89,9 @@ class LowLevelController:
                 for f in feet
             }
             base_next = np.stack([p_base, p_base + dt * v_base])
-            sol = whole_body_ik(r, base_next, np.stack([rot, rot]), targets)
+            sol = whole_body_ik(
+                r, base_next, np.stack([rot, rot]), targets, geometries=self.geometries
+            )
             for foot in feet:
                 idx = r.leg_joint_index[foot]
                 q_des = sol.joint_pos_rad[0, idx]
