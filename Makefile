@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller stand --course flat \
-		--duration 10 --push t=3,fx=40,fy=0,dur=0.1 --out runs/demo
+		--duration 10 --push t=3,fx=50,fy=0,dur=0.1 --out runs/demo
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks

@@ -44,13 +44,13 @@ def test_humanoid_structure() -> None:
         assert np.linalg.norm(m.body(f"{f}_foot").pos) == pytest.approx(0.22)
         # line foot: 0.15 m long, 0.02 m wide, toe 0.09 m ahead of the ankle, heel 0.06 m behind
         g = m.geom(f"{f}_foot")
-        half_len, radius = g.size[1], g.size[0]
-        x_toe = g.pos[0] + half_len + radius
-        x_heel = g.pos[0] - half_len - radius
+        assert g.type == mujoco.mjtGeom.mjGEOM_BOX
+        x_toe = g.pos[0] + g.size[0]
+        x_heel = g.pos[0] - g.size[0]
         assert x_toe - x_heel == pytest.approx(0.15)
         assert x_toe == pytest.approx(0.09)
         assert x_heel == pytest.approx(-0.06)
-        assert 2 * radius == pytest.approx(0.02)
+        assert 2 * g.size[1] == pytest.approx(0.02)
     knees = [i for i, n in enumerate(r.joint_names) if n.endswith("knee")]
     assert np.all(r.torque_limit_nm[knees] == 67.0)
     assert np.all(np.delete(r.torque_limit_nm, knees) == 33.5)

@@ -80,8 +80,8 @@ def test_zero_torque_robot_falls_and_fall_is_timed(humanoid) -> None:
     assert 0.0 < sim.fall.t_s < 3.0
 
 
-def test_standing_survives_a_4ns_push(humanoid) -> None:
-    push = Push(0.3, (40.0, 0.0, 0.0), 0.1)
+def test_standing_survives_a_5ns_push(humanoid) -> None:
+    push = Push(0.3, (50.0, 0.0, 0.0), 0.1)
     sim = Simulator(humanoid, load_course("flat"), SimConfig(pushes=(push,)))
     _run(sim, StandController(humanoid), 2.0)
     assert not sim.fall.fell

@@ -58,6 +58,7 @@ class LowLevelController:
         state: RobotState,
         stance_wrench: dict[str, np.ndarray],
         swing_target: dict[str, tuple[np.ndarray, np.ndarray]],
+        swing_yaw_rad: float | None = None,
     ) -> np.ndarray:
         """Joint torques (n_joints,).
 
@@ -65,6 +66,8 @@ class LowLevelController:
             state: measured state.
             stance_wrench: stance foot -> ground wrench (6,) [N; N m].
             swing_target: swing foot -> (position (3,), velocity (3,)) of the foot centre.
+            swing_yaw_rad: heading of the swing feet in the world [rad] (default: the
+                trunk's heading, i.e. hip yaw 0 as in Appendix B eq. 31).
         """
         r, c = self.robot, self.config
         model, data = r.pin_model, self.data
@@ -89,8 +92,9 @@ class LowLevelController:
                 for f in feet
             }
             base_next = np.stack([p_base, p_base + dt * v_base])
+            yaw = None if swing_yaw_rad is None else {f: np.full(2, swing_yaw_rad) for f in feet}
             sol = whole_body_ik(
-                r, base_next, np.stack([rot, rot]), targets, geometries=self.geometries
+                r, base_next, np.stack([rot, rot]), targets, yaw, geometries=self.geometries
             )
             for foot in feet:
                 idx = r.leg_joint_index[foot]

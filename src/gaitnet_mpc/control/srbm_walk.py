@@ -16,6 +16,7 @@ import pinocchio as pin
 
 from gaitnet_mpc.control.base import Controller, MPCStats
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.control.stance import StanceMap
 from gaitnet_mpc.errors import QPSolveError
 from gaitnet_mpc.gait import (
     GaitSchedule,
@@ -39,11 +40,15 @@ class SRBMWalkConfig:
     replan_period_s: float = 0.01
     com_height_m: float | None = None  # default: the height at reset
     max_pos_error_m: float = 0.05  # clamp of the position-tracking error in the reference
+    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
     path_gain_per_s: float = 1.0  # CoM path error -> velocity added to the foothold command
     retarget_stop_fraction: float = 0.8  # footholds are frozen in the last 20 % of a swing
     mpc: SRBMConfig = field(default_factory=SRBMConfig)
     low_level: LowLevelConfig = field(default_factory=LowLevelConfig)
-    swing: SwingConfig = field(default_factory=SwingConfig)
+    swing: SwingConfig = field(
+        default_factory=lambda: SwingConfig(touchdown_speed_mps=0.3, foot_half_length_m=0.075)
+    )
+    touchdown_depth_m: float = 0.005  # swing targets end this far below the ground
 
 
 def centroidal_inertia_body(robot: RobotModel) -> np.ndarray:
@@ -80,6 +85,7 @@ class SRBMWalkController(Controller):
             c.mpc,
         )
         self.low = LowLevelController(robot, c.low_level)
+        self.stance_map = StanceMap(robot)
         lateral = 0.0 if planar else 0.065
         self.raibert = RaibertHeuristic(
             RaibertConfig(
@@ -117,10 +123,28 @@ class SRBMWalkController(Controller):
         return self._steps
 
     # ------------------------------------------------------------- helpers
-    def _cmd_world(self, yaw: float) -> np.ndarray:
+    def _ramp(self, t_s: float) -> float:
+        """Fraction of the command applied ``t_s`` after the start (acceleration limit)."""
+        v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
+        return min(1.0, t_s * self.config.max_accel_mps2 / v_max)
+
+    def _cmd_world(self, yaw: float, t_s: float) -> np.ndarray:
+        """Commanded CoM velocity (3,) in the world at time ``t_s`` after the start."""
+        c, s = np.cos(yaw), np.sin(yaw)
+        k = self._ramp(t_s)
+        vx, vy = k * self.command.vx_mps, k * self.command.vy_mps
+        return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+
+    def _desired_com_xy(self, t_s: float) -> np.ndarray:
+        """Commanded CoM path (2,) at ``t_s`` after the start (ramped command integrated;
+        the heading is taken at ``t_s``, exact for straight walking)."""
+        v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
+        t_ramp = v_max / self.config.max_accel_mps2
+        travel_s = t_s * t_s / (2 * t_ramp) if t_s < t_ramp else t_s - t_ramp / 2
+        yaw = self._heading_cmd(self.t0_s + t_s)
         c, s = np.cos(yaw), np.sin(yaw)
         vx, vy = self.command.vx_mps, self.command.vy_mps
-        return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+        return self.com0[:2] + travel_s * np.array([c * vx - s * vy, s * vx + c * vy])
 
     def _x0(self, state: RobotState) -> np.ndarray:
         rpy = state.base_rpy_rad
@@ -135,12 +159,12 @@ class SRBMWalkController(Controller):
         yaw_now = self.yaw0 + yaw_rate * t_now
         x_ref = np.zeros((len(stage_times), NX))
         # Desired CoM path integrated from the start, error clamped to avoid wind-up.
-        desired = self.com0 + self._cmd_world(yaw_now) * t_now
-        err = np.clip(desired[:2] - state.com_world_m[:2], -0.05, 0.05)
+        lim = self.config.max_pos_error_m
+        err = np.clip(self._desired_com_xy(t_now) - state.com_world_m[:2], -lim, lim)
         base_xy = state.com_world_m[:2] + err
         for k, tk in enumerate(stage_times):
             yaw_k = yaw_now + yaw_rate * tk
-            v_cmd = self._cmd_world(yaw_k)
+            v_cmd = self._cmd_world(yaw_k, t_now + tk)
             x_ref[k, 2] = yaw_k
             x_ref[k, 3:5] = base_xy + v_cmd[:2] * tk
             x_ref[k, 5] = self.z_ref
@@ -158,20 +182,16 @@ class SRBMWalkController(Controller):
         # Steer the footholds back to the commanded path: a position error adds a bounded
         # velocity to the command the heuristic sees (heading frame).
         t_now = state.t_s - self.t0_s
-        desired = (
-            self.com0 + self._cmd_world(self.yaw0 + self.command.yaw_rate_radps * t_now) * t_now
-        )
-        err_world = desired[:2] - state.com_world_m[:2]
+        ex, ey = self._desired_com_xy(t_now) - state.com_world_m[:2]
         c, s_ = np.cos(yaw), np.sin(yaw)
-        err_heading = np.array(
-            [c * err_world[0] + s_ * err_world[1], -s_ * err_world[0] + c * err_world[1]]
-        )
+        err_heading = np.array([c * ex + s_ * ey, -s_ * ex + c * ey])
         v_fb = np.clip(self.config.path_gain_per_s * err_heading, -0.2, 0.2)
+        ramp = self._ramp(t_now)
         p = self.raibert.foothold(
             foot,
             p_com_world_m=state.com_world_m,
             v_com_world_mps=state.com_vel_world_mps,
-            cmd_vel_mps=np.array([self.command.vx_mps, self.command.vy_mps]) + v_fb,
+            cmd_vel_mps=ramp * np.array([self.command.vx_mps, self.command.vy_mps]) + v_fb,
             stance_duration_s=sched.current_step_duration_s,
             time_to_touchdown_s=t_touchdown_s,
             p_stance_foot_world_m=state.foot_pos_world_m[stance],
@@ -179,7 +199,7 @@ class SRBMWalkController(Controller):
             yaw_rad=yaw,
             cmd_yaw_rate_radps=self.command.yaw_rate_radps,
         )
-        p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m
+        p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m - self.config.touchdown_depth_m
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]
         return p
@@ -214,6 +234,19 @@ class SRBMWalkController(Controller):
         if self.swing.retarget(target, sched.time_in_step_s):
             self.foothold[foot] = target
 
+    def _torque_limits(
+        self, state: RobotState, foot_index: int, mask: np.ndarray
+    ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+        """Stance-leg torque limits for the MPC: ``|J_leg^T [f; m]| <= tau_max`` with the
+        current leg Jacobian, on the stages of the current step."""
+        q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
+        self.stance_map.update(q, v)
+        foot = FEET[foot_index]
+        idx = self.robot.n_root_dofs + self.robot.leg_joint_index[foot]
+        j_t = self.stance_map.foot_jacobian(foot)[:, idx].T  # (n_leg, 6)
+        tau_max = self.robot.torque_limit_nm[self.robot.leg_joint_index[foot]]
+        return foot_index, mask, j_t, tau_max
+
     def _replan(self, state: RobotState) -> None:
         sched = self.schedule
         hz = sched.horizon()
@@ -237,10 +270,14 @@ class SRBMWalkController(Controller):
         feet_pos[:, i_sw] = self.foothold[swing_now]
         if self.robot.spec.planar:
             feet_pos[:, :, 1] = state.com_world_m[1]
-        yaw = np.full((h, 2), float(state.base_rpy_rad[2]))
+        # Stance feet keep their measured heading; a foot that lands later takes the
+        # commanded heading its swing is steered to.
+        yaw = np.full((h, 2), self._heading_cmd(state.t_s))
+        yaw[steps == 0, i_st] = state.foot_yaw_rad[stance_now]
         t0 = time.perf_counter()
+        limits = self._torque_limits(state, i_st, steps == 0)
         try:
-            plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw)
+            plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw, limits)
         except QPSolveError:
             self._stats.record(time.perf_counter() - t0, 1, False, False)
             return  # keep the last good wrench
@@ -264,4 +301,9 @@ class SRBMWalkController(Controller):
             wrench[stance] = self.wrench[FEET.index(stance)]
         t_swing = sched.time_in_step_s
         target = {swing: (self.swing.position(t_swing), self.swing.velocity(t_swing))}
-        return self.low.torques(state, wrench, target)
+        yaw = None if self.robot.spec.planar else self._heading_cmd(state.t_s)
+        return self.low.torques(state, wrench, target, yaw)
+
+    def _heading_cmd(self, t_s: float) -> float:
+        """Commanded heading [rad] at time ``t_s``: initial yaw plus integrated yaw rate."""
+        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)

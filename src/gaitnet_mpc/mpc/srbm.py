@@ -146,6 +146,7 @@ class SRBMMPC:
         contact: np.ndarray,
         feet_pos_m: np.ndarray,
         feet_yaw_rad: np.ndarray,
+        torque_limits: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None,
     ) -> tuple[QPProblem, np.ndarray, np.ndarray]:
         """The condensed QP over U (h*12,); also returns (Sx x0, Su) for predictions.
 
@@ -157,6 +158,9 @@ class SRBMMPC:
             feet_pos_m: (h, 2, 3) foot centre per stage and foot (stance: where it stands;
                 swing: ignored).
             feet_yaw_rad: (h, 2) foot heading per stage.
+            torque_limits: optional ``(foot_index, stage_mask (h,), J_T (n_leg, 6),
+                tau_max (n_leg,))``: joint-torque limits ``|J_T [f; m]| <= tau_max`` of
+                the stance leg (``tau = -J_c^T [f; m]``), on the stages of ``stage_mask``.
         """
         h = self.config.horizon
         sx, su = self.condense(x0, x_ref[:h], dts_s, feet_pos_m)
@@ -181,6 +185,15 @@ class SRBMMPC:
                 rows.append(row)
                 lo.append(l_)
                 hi.append(u_)
+        if torque_limits is not None:
+            i, mask, j_t, tau_max = torque_limits
+            for k in np.flatnonzero(mask):
+                row = np.zeros((j_t.shape[0], h * NU))
+                col = NU * k + NU_FOOT * i
+                row[:, col : col + NU_FOOT] = j_t
+                rows.append(row)
+                lo.append(-tau_max)
+                hi.append(tau_max)
         problem = QPProblem(
             0.5 * (hess + hess.T),
             grad,
@@ -198,9 +211,12 @@ class SRBMMPC:
         contact: np.ndarray,
         feet_pos_m: np.ndarray,
         feet_yaw_rad: np.ndarray,
+        torque_limits: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None,
     ) -> SRBMPlan:
         """Solve one MPC problem; raises :class:`QPSolveError` if the QP fails."""
-        problem, free, su = self.build(x0, x_ref, dts_s, contact, feet_pos_m, feet_yaw_rad)
+        problem, free, su = self.build(
+            x0, x_ref, dts_s, contact, feet_pos_m, feet_yaw_rad, torque_limits
+        )
         sol = self.workspace.solve_or_raise(problem, warm_start=self._last_u)
         self._last_u = sol.x
         h = self.config.horizon

@@ -236,6 +236,10 @@ class Simulator:
             )
         )
 
+    def _site_yaw(self, site_id: int) -> float:
+        x_axis = self.data.site_xmat[site_id].reshape(3, 3)[:, 0]
+        return float(np.arctan2(x_axis[1], x_axis[0]))
+
     def state(self) -> RobotState:
         """Read the current state (no side effects on the simulation)."""
         m, d, r = self.model, self.data, self.robot
@@ -264,6 +268,7 @@ class Simulator:
             com_vel_world_mps=d.subtree_linvel[root].copy(),
             h_measured=np.concatenate([mass * d.subtree_linvel[root], d.subtree_angmom[root]]),
             foot_pos_world_m={f: d.site_xpos[self._foot_sites[f]].copy() for f in FEET},
+            foot_yaw_rad={f: self._site_yaw(self._foot_sites[f]) for f in FEET},
             foot_contact={f: f in touching for f in FEET},
             foot_wrench_world=wrench,
         )

@@ -22,6 +22,7 @@ class RobotState:
         com_world_m, com_vel_world_mps: whole-body centre of mass and its velocity.
         h_measured: centroidal momentum [l_G (kg m/s); k_G (kg m^2/s)] about the CoM (6,).
         foot_pos_world_m: per foot, the foot-centre site position (3,).
+        foot_yaw_rad: per foot, heading of the foot's long (x) axis in the world [rad].
         foot_contact: per foot, True if any of its geoms touches terrain.
         foot_wrench_world: per foot, [force (N); moment about the foot centre (N m)] (6,)
             that the ground exerts on the foot, summed over contact points.
@@ -40,6 +41,7 @@ class RobotState:
     com_vel_world_mps: np.ndarray
     h_measured: np.ndarray
     foot_pos_world_m: dict[str, np.ndarray]
+    foot_yaw_rad: dict[str, float]
     foot_contact: dict[str, bool]
     foot_wrench_world: dict[str, np.ndarray]
 

@@ -1,0 +1,1146 @@
+"""Joint-space reference trajectories over the MPC horizon and their centroidal maps.
+
+This module implements Algorithm 1's ``f_ref`` (lines 2-3) and ``f_IK`` (line 9):
+
+* :func:`make_reference` (``f_ref``): from the measured configuration, the user command and
+  the planned footholds, a whole-body trajectory ``{q_k^ref, v_k^ref}_{k=0..h}`` at the
+  ``h + 1`` stage boundaries, mapped to the spatial momentum ``h_k^ref = A_G(q_k^ref)
+  v_k^ref`` (eq. 11), the centroidal pose ``H_k^ref`` (eq. 12 / Appendix A), the CoM path
+  ``p_c^ref`` and the foot path ``p_f^ref`` (Sec. II, eq. 18).
+* :func:`update_reference` (``f_IK``): the same trajectory re-solved from the MPC's latest
+  foothold and CoM iterates (and possibly a new ``dt`` from Gait-Net), so that the
+  momentum references stay kinematically consistent with the iterate (Remark 1, Remark 3).
+
+Reference motion (f_ref)
+------------------------
+
+Stage boundary ``k`` lies at ``t_k = sum(dts_s[:k])`` seconds from now (``t_0 = 0``).
+
+* CoM: starts at the current CoM (x, y) and moves with the commanded velocity
+  ``(vx, vy)`` given in the heading frame, whose yaw integrates the commanded yaw rate
+  ``psi(t) = psi_0 + omega t`` (exact arc, ``p(t) = p_0 + R_z(psi_0 + omega t / 2)
+  v t sinc(omega t / 2)``); its height is ``ground + com_height_m`` where the ground is
+  under the feet standing in stage 0 (foot-centre height minus the foot contact radius).
+* Trunk: ``R = R_z(psi(t)) R_y(trunk_pitch_rad)`` (upright, roll = 0); its position is
+  solved so that the CoM of the whole configuration lands on the CoM path (below).
+* Feet: each foot's contact column is split into stance and swing segments. A foot stands
+  on foothold ``F_j`` during a stance segment; the ``j``-th swing goes from ``F_j`` to
+  ``F_{j+1}``. ``F_0`` is the foot's current position (or, for a foot swinging now, its
+  lift-off point), ``F_1, F_2, ...`` the planned touchdown targets. The swing path is the
+  obstacle-free :class:`gaitnet_mpc.gait.SwingTrajectory` (minimum-jerk quintic in x-y, apex
+  ``max(z_0, z_1) + swing_apex_height_m`` at mid-swing, zero touchdown speed), evaluated in
+  closed form and vectorised (bit-for-bit the same curve, about 100x cheaper than building
+  the objects; see the tests). The current swing runs over the whole current step, from
+  ``-time_in_step_s`` to its touchdown; later swings over their step (``h' dt``).
+  Foot headings: a standing foot keeps its heading, a new foothold gets the trunk heading
+  at touchdown, a swinging foot blends the two with the same minimum-jerk phase.
+* Legs: analytic IK (:func:`gaitnet_mpc.kinematics.whole_body_ik`, Appendix B); arms at
+  the nominal pose.
+
+CoM placement (both functions): the trunk position of stage ``k`` is found by the fixed
+point ``p_B <- p_B + G^-1 (p_c^des - c(q(p_B)))`` where ``c(q)`` is the CoM of the IK
+configuration (``pin.centerOfMass``) and ``G`` a constant diagonal estimate of
+``d c / d p_B`` with the feet held fixed (about 0.92: the legs fold; measured once at the
+nominal pose in :class:`ReferenceWorkspace`). It starts from the nominal trunk-to-CoM
+offset (f_ref) or from the previous reference's trunk-to-CoM offset, corrected to first
+order for the CoM and foot moves (f_IK). ``ReferenceConfig.com_iterations`` corrections
+follow (default 1: the CoM lands within ~0.5 mm of its target for 2 cm iterate moves, 2:
+~0.05 mm); the reported ``p_com_ref`` is always the exact CoM of ``q_ref``.
+
+Velocities, momenta and the centroidal pose
+-------------------------------------------
+
+``v_ref`` is the derivative of the configuration path along the stage times by
+second-order finite differences on the (non-uniform) grid ``t_k`` (``numpy.gradient``):
+joint rates directly, the trunk's linear velocity as ``R^T dp_B/dt`` and its angular
+velocity as ``R^T e_z dpsi/dt`` (Pinocchio's local free-flyer velocity; the biped's root
+is Euclidean, ``v = dq/dt``). Then ``h_ref[k] = A_G(q_ref[k]) v_ref[k]`` (eq. 11,
+``pin.computeCentroidalMomentum``; ``[linear [kg m/s]; angular about the CoM
+[kg m^2/s]]``, world axes).
+
+Centroidal pose ``H_ref`` (``[linear [kg m]; angular [kg m^2]]``), ``pose_method``:
+
+* ``"riemann"`` (default): linear part ``m p_com_ref`` exactly (the primitive of ``l = m
+  dp_c/dt``, the quantity that eq. 20 and the CoM cost of eq. 18 use); angular part
+  ``H_0 + sum_{i<k} k_ref[i] dt_i``, the left Riemann sum that the MPC's discrete dynamics
+  (eq. 10, ``H_{k+1} = H_k + h_k dt_k``) propagate, started from the measured state's
+  angular pose ``H_0`` (argument ``pose0_angular_kgm2``, default 0: only differences of
+  the angular pose are physical).
+* ``"eq30"``: the paper's integration by parts (eq. 12 = eq. 30) via
+  :func:`gaitnet_mpc.kinematics.centroidal_pose_eq30` (``subtract_initial=True``), shifted
+  so that ``H_ref[0] = [m p_com_ref[0]; H_0]``. Both parts then differ from the Riemann
+  definition by ``O(dt)`` (checked in the tests); it costs ~0.5 ms more per call.
+
+Cost
+----
+
+Create one :class:`ReferenceWorkspace` per robot and controller and pass it to
+:func:`make_reference` (reading the leg geometry and measuring the CoM gain costs
+milliseconds); the returned reference keeps it, so :func:`update_reference` reuses its
+Pinocchio data and geometry. Everything is vectorised over the ``h + 1`` stages; the only
+Python loops run over the two feet, their few stance/swing segments and the Pinocchio
+calls per stage (CoM, momentum). See ``benchmarks/results/reference.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Literal, Protocol
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
+
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gait.schedule import GaitHorizon
+from gaitnet_mpc.kinematics.centroidal import centroidal_pose_eq30, centroidal_pose_riemann
+from gaitnet_mpc.kinematics.leg_ik import (
+    LegGeometry,
+    PlanarLegGeometry,
+    leg_geometries,
+    whole_body_ik,
+)
+from gaitnet_mpc.robots.model import RobotModel
+from gaitnet_mpc.robots.spec import FEET
+
+__all__ = [
+    "CentroidalReference",
+    "ReferenceConfig",
+    "ReferenceTiming",
+    "ReferenceWorkspace",
+    "make_reference",
+    "swing_profile",
+    "update_reference",
+]
+
+_N_FEET = len(FEET)
+_GAIN_PROBE_M = 0.01  # trunk / foot displacement that probes the CoM gains [m]
+
+
+# ------------------------------------------------------------------------ configuration
+@dataclass(frozen=True)
+class ReferenceConfig:
+    """Shape of the reference motion (f_ref) and of its update (f_IK).
+
+    Attributes:
+        com_height_m: CoM height above the ground under the stance feet [m]; None: the
+            nominal standing pose's (humanoid3d 0.555 m, biped2d 0.502 m).
+        swing_apex_height_m: swing apex above ``max(lift-off z, touchdown z)`` [m].
+        trunk_pitch_rad: constant trunk pitch [rad] (roll is always 0).
+        com_iterations: fixed-point corrections of the trunk position that put the CoM of
+            the IK configuration on the target CoM path (module docstring); each costs one
+            whole-body IK and ``h + 1`` CoM evaluations [-].
+        pose_method: ``"riemann"`` or ``"eq30"``, the definition of ``H_ref`` (module
+            docstring).
+    """
+
+    com_height_m: float | None = None
+    swing_apex_height_m: float = 0.06
+    trunk_pitch_rad: float = 0.0
+    com_iterations: int = 1
+    pose_method: Literal["riemann", "eq30"] = "riemann"
+
+    def __post_init__(self) -> None:
+        if self.com_height_m is not None and not _positive(self.com_height_m):
+            raise ConfigError("com_height_m", self.com_height_m, "a finite height > 0 m or None")
+        a = self.swing_apex_height_m
+        if not (_is_number(a) and math.isfinite(a) and a >= 0.0):
+            raise ConfigError("swing_apex_height_m", a, "a finite height >= 0 m")
+        p = self.trunk_pitch_rad
+        if not (_is_number(p) and math.isfinite(p) and abs(p) < 0.5 * math.pi):
+            raise ConfigError("trunk_pitch_rad", p, "a finite angle in (-pi/2, pi/2) rad")
+        n = self.com_iterations
+        if not isinstance(n, int | np.integer) or isinstance(n, bool) or n < 0:
+            raise ConfigError("com_iterations", n, "an integer >= 0")
+        if self.pose_method not in ("riemann", "eq30"):
+            raise ConfigError("pose_method", self.pose_method, "'riemann' or 'eq30'")
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+
+
+def _positive(value: object) -> bool:
+    return _is_number(value) and math.isfinite(value) and value > 0.0  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, eq=False)
+class ReferenceTiming:
+    """Stage timing and contact sequence of the horizon, as the reference needs it.
+
+    Attributes:
+        dts_s: (h,) duration of each stage from *now* [s]; stage 0 may be the unelapsed
+            part of the current stage (see :meth:`from_horizon`). Boundary ``k`` lies at
+            ``t_k = sum(dts_s[:k])``.
+        contact: (h, 2) bool stance mask per stage, columns in ``FEET`` order.
+        time_in_step_s: time since the current step began [s]; a foot swinging in stage 0
+            lifted off this long ago.
+        stages_per_step: ``h'`` [-]; a swing that runs past the horizon end lasts
+            ``h' * full_dts_s[first stage of the swing]``.
+        full_dts_s: (h,) full stage lengths [s] (differs from ``dts_s`` only in a partial
+            stage 0); None: ``dts_s``.
+    """
+
+    dts_s: np.ndarray
+    contact: np.ndarray
+    time_in_step_s: float = 0.0
+    stages_per_step: int = 5
+    full_dts_s: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        dts = np.array(self.dts_s, dtype=float).reshape(-1)
+        if dts.size == 0 or not np.all(np.isfinite(dts)) or np.any(dts <= 0.0):
+            raise ConfigError("dts_s", self.dts_s, "(h,) finite stage durations > 0 s, h >= 1")
+        contact = np.array(self.contact, dtype=bool)
+        if contact.shape != (dts.size, _N_FEET):
+            raise ConfigError("contact", self.contact, f"a ({dts.size}, {_N_FEET}) bool mask")
+        t_in = self.time_in_step_s
+        if not (_is_number(t_in) and math.isfinite(t_in) and t_in >= 0.0):
+            raise ConfigError("time_in_step_s", t_in, "a finite time >= 0 s")
+        n = self.stages_per_step
+        if not isinstance(n, int | np.integer) or isinstance(n, bool) or n < 1:
+            raise ConfigError("stages_per_step", n, "an integer >= 1")
+        full = dts if self.full_dts_s is None else np.array(self.full_dts_s, dtype=float)
+        if full.shape != dts.shape or not np.all(np.isfinite(full)) or np.any(full <= 0.0):
+            raise ConfigError("full_dts_s", self.full_dts_s, f"({dts.size},) durations > 0 s")
+        for name, arr in (("dts_s", dts), ("contact", contact), ("full_dts_s", full)):
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "time_in_step_s", float(t_in))
+        object.__setattr__(self, "stages_per_step", int(n))
+
+    @property
+    def horizon(self) -> int:
+        """Number of stages ``h``."""
+        return int(self.dts_s.size)
+
+    @cached_property
+    def times_s(self) -> np.ndarray:
+        """(h+1,) stage boundary times from now [s], ``t_0 = 0`` (read-only)."""
+        t = np.concatenate([[0.0], np.cumsum(self.dts_s)])
+        t.flags.writeable = False
+        return t
+
+    @cached_property
+    def derivative_matrix(self) -> np.ndarray:
+        """(h+1, h+1) finite-difference matrix ``D`` on the boundary times: ``D @ x`` is
+        ``numpy.gradient(x, times_s, axis=0, edge_order=2)`` (three-point, second order on
+        the non-uniform grid; two-point for ``h = 1``)."""
+        d = _derivative_matrix(self.times_s)
+        d.flags.writeable = False
+        return d
+
+    def with_dts(self, dts_s: ArrayLike) -> ReferenceTiming:
+        """Same contact sequence with new stage durations (e.g. a Gait-Net dt, Alg. 1 l. 8).
+
+        The full stage lengths follow the new ``dts_s`` except for a partial stage 0,
+        whose full length is scaled with it.
+        """
+        dts = np.array(dts_s, dtype=float).reshape(-1)
+        if dts.shape != self.dts_s.shape:
+            raise ConfigError("dts_s", dts_s, f"({self.horizon},) stage durations [s]")
+        full = dts.copy()
+        full[0] = dts[0] * float(self.full_dts_s[0] / self.dts_s[0])  # type: ignore[index]
+        return replace(self, dts_s=dts, full_dts_s=full)
+
+    @classmethod
+    def from_horizon(
+        cls,
+        horizon: GaitHorizon,
+        stages_per_step: int = 5,
+        partial_first_stage: bool = True,
+        min_first_stage_s: float = 1e-3,
+    ) -> ReferenceTiming:
+        """Timing from a :class:`gaitnet_mpc.gait.GaitHorizon` snapshot.
+
+        Args:
+            horizon: the schedule's snapshot.
+            stages_per_step: ``h'`` of the schedule (``GaitScheduleConfig.stages_per_step``).
+            partial_first_stage: True: boundary 0 is *now* and stage 0 lasts
+                ``max(first_stage_remaining_s, min_first_stage_s)``; False: boundary 0 is
+                the start of the current stage and every stage has its full length.
+            min_first_stage_s: lower bound of a partial stage 0 [s].
+        """
+        full = np.array(horizon.dts_s, dtype=float)
+        dt0 = float(full[0])
+        stage_start_in_step = float(horizon.stage_in_step[0]) * dt0
+        dts = full.copy()
+        if partial_first_stage:
+            remaining = float(horizon.first_stage_remaining_s)
+            dts[0] = max(remaining, min_first_stage_s)
+            t_in = stage_start_in_step + max(dt0 - remaining, 0.0)
+        else:
+            t_in = stage_start_in_step
+        return cls(
+            dts_s=dts,
+            contact=np.array(horizon.contact, dtype=bool),
+            time_in_step_s=t_in,
+            stages_per_step=stages_per_step,
+            full_dts_s=full,
+        )
+
+
+def _derivative_matrix(times_s: np.ndarray) -> np.ndarray:
+    """(n, n) matrix of ``numpy.gradient(., times_s, edge_order=2)`` (see there)."""
+    n = times_s.size
+    d = np.zeros((n, n))
+    if n == 1:
+        return d
+    if n == 2:
+        w = 1.0 / (times_s[1] - times_s[0])
+        d[:, 0], d[:, 1] = -w, w
+        return d
+    h = np.diff(times_s)  # (n-1,)
+    h1, h2 = h[:-1], h[1:]  # spacing before / after each interior point
+    k = np.arange(1, n - 1)
+    d[k, k - 1] = -h2 / (h1 * (h1 + h2))
+    d[k, k] = (h2 - h1) / (h1 * h2)
+    d[k, k + 1] = h1 / (h2 * (h1 + h2))
+    a, b = h[0], h[1]  # first point: one-sided, second order
+    d[0, :3] = [-(2.0 * a + b) / (a * (a + b)), (a + b) / (a * b), -a / (b * (a + b))]
+    a, b = h[-1], h[-2]  # last point
+    d[-1, -3:] = [a / (b * (a + b)), -(a + b) / (a * b), (2.0 * a + b) / (a * (a + b))]
+    return d
+
+
+class CommandLike(Protocol):
+    """Anything with the fields of :class:`gaitnet_mpc.sim.episode.Command`."""
+
+    vx_mps: float
+    vy_mps: float
+    yaw_rate_radps: float
+
+
+# --------------------------------------------------------------------------- workspace
+class ReferenceWorkspace:
+    """Per-robot constants and scratch data shared by every reference call.
+
+    Holds the Pinocchio data, the leg geometries, the total mass, the nominal CoM height,
+    the nominal trunk-to-CoM offset, the nominal lateral foot offsets and the CoM gain
+    ``G = diag(d c / d p_B)`` (feet fixed) of the fixed-point CoM placement. Not
+    thread-safe (the Pinocchio data is scratch space); create one per controller.
+
+    Args:
+        robot: ``humanoid3d`` or ``biped2d``.
+        config: reference settings; None: defaults.
+    """
+
+    def __init__(self, robot: RobotModel, config: ReferenceConfig | None = None) -> None:
+        self.robot = robot
+        self.config = config if config is not None else ReferenceConfig()
+        self.model: pin.Model = robot.pin_model
+        self.data: pin.Data = self.model.createData()
+        self.geometries: dict[str, LegGeometry | PlanarLegGeometry] = leg_geometries(robot)
+        self.mass_kg = float(pin.computeTotalMass(self.model))
+        self.planar = bool(robot.spec.planar)
+        self.contact_radius_m = float(robot.spec.foot_contact_radius_m)
+
+        q_nom, _ = robot.mj_to_pin(robot.standing_qpos(), np.zeros(robot.nv))
+        com_nom = np.array(pin.centerOfMass(self.model, self.data, q_nom, False))
+        pin.updateFramePlacements(self.model, self.data)
+        p_feet = {f: self.data.oMf[robot.pin_foot_frame_ids[f]].translation.copy() for f in FEET}
+        p_base = np.array([q_nom[0], 0.0, q_nom[1]]) if self.planar else q_nom[:3].copy()
+        ground_z = min(p[2] for p in p_feet.values()) - self.contact_radius_m
+        #: nominal CoM height above the ground [m]
+        self.nominal_com_height_m = float(com_nom[2] - ground_z)
+        self.com_height_m = (
+            self.nominal_com_height_m
+            if self.config.com_height_m is None
+            else float(self.config.com_height_m)
+        )
+        #: (3,) trunk origin -> CoM at the nominal pose, trunk frame (level trunk) [m]
+        self.com_offset_trunk_m = com_nom - p_base
+        #: nominal lateral foot offset from the CoM (heading-frame y) [m], 0 for the biped
+        self.foot_lateral_m = {
+            f: 0.0 if self.planar else float(p_feet[f][1] - com_nom[1]) for f in FEET
+        }
+        #: (3,) diag(d c / d p_B), feet fixed; (2, 3) diag(d c / d p_f) per foot
+        self.com_gain, self.com_gain_feet = self._measure_com_gains(p_base, p_feet)
+
+    def _measure_com_gains(
+        self, p_base: np.ndarray, p_feet: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """CoM sensitivities at the nominal pose by central differences (probe 1 cm):
+        ``diag(d c / d p_B)`` (3,) with the feet fixed, and ``diag(d c / d p_f)`` (2, 3)
+        per foot with the trunk and the other foot fixed (the CoM follows the trunk only
+        partly because the legs fold; translation invariance makes the three sum to 1)."""
+        probe = np.concatenate([np.eye(3), -np.eye(3)]) * _GAIN_PROBE_M  # (6, 3)
+        n = 6 * (1 + _N_FEET)
+        bases = np.tile(p_base, (n, 1))
+        bases[:6] += probe
+        targets = {f: np.tile(p, (n, 1)) for f, p in p_feet.items()}
+        for i, f in enumerate(FEET):
+            targets[f][6 * (i + 1) : 6 * (i + 2)] += probe
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3))
+        sol = whole_body_ik(self.robot, bases, rot, targets, geometries=self.geometries)
+        q = _configurations(self, bases, np.zeros(n), 0.0, sol.joint_pos_rad)
+        com = self._com(q).reshape(1 + _N_FEET, 2, 3, 3)  # (which, +/-, axis, xyz)
+        gains = np.diagonal(com[:, 0] - com[:, 1], axis1=1, axis2=2) / (2.0 * _GAIN_PROBE_M)
+        gains = gains.copy()  # (3, 3): trunk, left foot, right foot
+        if self.planar:  # y is not a degree of freedom of the planar model
+            gains[0, 1], gains[1:, 1] = 1.0, 0.0
+        if not (sol.reachable.all() and np.all(gains[0] > 0.2) and np.all(gains[0] < 1.5)):
+            raise RuntimeError(f"{self.robot.name}: implausible CoM gains {gains}")
+        return gains[0], gains[1:]
+
+    def _com(self, q: np.ndarray) -> np.ndarray:
+        """(N, 3) CoM of configurations q (N, nq) [m]."""
+        out = np.empty((q.shape[0], 3))
+        for k in range(q.shape[0]):
+            out[k] = pin.centerOfMass(self.model, self.data, q[k], False)
+        return out
+
+
+# ------------------------------------------------------------------------- the result
+@dataclass(eq=False)
+class CentroidalReference:
+    """Reference trajectory at the ``h + 1`` stage boundaries (Alg. 1 ``x^ref``, ``p_f^ref``).
+
+    Attributes:
+        q_ref: (h+1, nq) Pinocchio configurations.
+        v_ref: (h+1, nv) Pinocchio velocities (local free-flyer frame).
+        h_ref: (h+1, 6) spatial momentum ``A_G(q_ref) v_ref`` (eq. 11), ``[linear [kg m/s];
+            angular about the CoM [kg m^2/s]]``, world axes.
+        H_ref: (h+1, 6) centroidal pose (eq. 12 / 30, see the module docstring),
+            ``[linear [kg m]; angular [kg m^2]]``.
+        p_foot_ref: (h+1, 2, 3) foot-centre (foothold point) targets [m], ``FEET`` order;
+            the IK targets, which ``q_ref`` reaches where ``reachable``.
+        p_com_ref: (h+1, 3) CoM of ``q_ref`` [m] (``pin.centerOfMass``).
+        reachable: (h+1,) bool, True where both foot targets were reached exactly.
+        dts_s: (h,) stage durations [s].
+        times_s: (h+1,) boundary times from now [s].
+        p_base_ref: (h+1, 3) trunk positions [m].
+        rot_base_ref: (h+1, 3, 3) trunk rotations (world <- trunk).
+        yaw_ref_rad: (h+1,) trunk heading [rad].
+        foot_yaw_ref_rad: (h+1, 2) desired foot headings [rad] (zeros for the biped).
+        footholds_m: foot -> (n_f, 3) footholds ``F_0, F_1, ...`` [m] (``F_0`` = position at
+            the start of the horizon or lift-off point, then touchdown targets).
+        foothold_yaw_rad: foot -> (n_f,) heading of each foothold [rad].
+        foothold_index: (h+1, 2) int, foothold ``j`` the foot stands on / lifted off from.
+        swing_phase: (h+1, 2) normalised swing time in [0, 1] from ``F_j`` to ``F_{j+1}``
+            (0 while standing on ``F_j``).
+        timing: the timing the reference was built with.
+        time_in_swing_s: (2,) time since lift-off of a foot swinging in stage 0 [s] (0 if
+            standing, or if its lift-off point was not given and the swing restarts now).
+        yaw_rate_radps: commanded yaw rate [rad/s] (trunk heading ``yaw_ref_rad[0] +
+            yaw_rate * t``).
+        pose0_angular_kgm2: (3,) angular centroidal pose at boundary 0 [kg m^2].
+        workspace: the :class:`ReferenceWorkspace` used (reused by :func:`update_reference`).
+    """
+
+    q_ref: np.ndarray
+    v_ref: np.ndarray
+    h_ref: np.ndarray
+    H_ref: np.ndarray
+    p_foot_ref: np.ndarray
+    p_com_ref: np.ndarray
+    reachable: np.ndarray
+    dts_s: np.ndarray
+    times_s: np.ndarray
+    p_base_ref: np.ndarray
+    rot_base_ref: np.ndarray
+    yaw_ref_rad: np.ndarray
+    foot_yaw_ref_rad: np.ndarray
+    footholds_m: dict[str, np.ndarray]
+    foothold_yaw_rad: dict[str, np.ndarray]
+    foothold_index: np.ndarray
+    swing_phase: np.ndarray
+    timing: ReferenceTiming
+    time_in_swing_s: np.ndarray
+    yaw_rate_radps: float
+    pose0_angular_kgm2: np.ndarray
+    workspace: ReferenceWorkspace = field(repr=False, compare=False)
+
+    @property
+    def horizon(self) -> int:
+        """Number of stages ``h``."""
+        return int(self.dts_s.size)
+
+    @property
+    def all_reachable(self) -> bool:
+        """True iff every stage's IK reached its foot targets."""
+        return bool(np.all(self.reachable))
+
+
+# ----------------------------------------------------------------------- swing profile
+def _min_jerk(s: np.ndarray) -> np.ndarray:
+    """Minimum-jerk blend ``10 s^3 - 15 s^4 + 6 s^5`` (zero rate/acceleration at 0 and 1)."""
+    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
+
+
+def swing_profile(
+    p0_m: np.ndarray, p1_m: np.ndarray, phase: np.ndarray, apex_height_m: float
+) -> np.ndarray:
+    """Obstacle-free swing path of :class:`gaitnet_mpc.gait.SwingTrajectory`, vectorised.
+
+    x-y: ``p0 + (p1 - p0) sigma(s)``; z: rise from ``z0`` to the apex
+    ``max(z0, z1) + apex_height_m`` over ``s`` in [0, 1/2] and descent to ``z1`` over
+    [1/2, 1], each ``sigma``-shaped (zero touchdown speed), ``sigma`` the minimum-jerk
+    blend. ``s = 0`` is ``p0`` and ``s = 1`` is ``p1`` exactly.
+
+    Args:
+        p0_m: (N, 3) lift-off points [m].
+        p1_m: (N, 3) touchdown points [m].
+        phase: (N,) normalised swing time ``s = t / T`` in [0, 1].
+        apex_height_m: apex above ``max(z0, z1)`` [m].
+
+    Returns:
+        (N, 3) foot positions [m].
+    """
+    s = np.clip(phase, 0.0, 1.0)
+    out = p0_m + (p1_m - p0_m) * _min_jerk(s)[:, None]
+    z0, z1 = p0_m[:, 2], p1_m[:, 2]
+    apex = np.maximum(z0, z1) + apex_height_m
+    rise = s < 0.5
+    out[:, 2] = np.where(
+        rise,
+        z0 + (apex - z0) * _min_jerk(np.minimum(2.0 * s, 1.0)),
+        apex + (z1 - apex) * _min_jerk(np.maximum(2.0 * s - 1.0, 0.0)),
+    )
+    return out
+
+
+# ------------------------------------------------------------------- kinematic helpers
+def _rotations(yaw_rad: np.ndarray, pitch_rad: float) -> np.ndarray:
+    """(N, 3, 3) ``R_z(yaw) R_y(pitch)``."""
+    cy, sy = np.cos(yaw_rad), np.sin(yaw_rad)
+    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
+    rot = np.zeros((yaw_rad.shape[0], 3, 3))
+    rot[:, 0, 0], rot[:, 0, 1], rot[:, 0, 2] = cy * cp, -sy, cy * sp
+    rot[:, 1, 0], rot[:, 1, 1], rot[:, 1, 2] = sy * cp, cy, sy * sp
+    rot[:, 2, 0], rot[:, 2, 2] = -sp, cp
+    return rot
+
+
+def _configurations(
+    ws: ReferenceWorkspace,
+    p_base_m: np.ndarray,
+    yaw_rad: np.ndarray,
+    pitch_rad: float,
+    joint_pos_rad: np.ndarray,
+) -> np.ndarray:
+    """(N, nq) Pinocchio configurations for trunk ``R_z(yaw) R_y(pitch)`` at ``p_base_m``.
+
+    Vectorised :func:`gaitnet_mpc.kinematics.pin_configuration`: the quaternion of
+    ``R_z(psi) R_y(theta)`` is ``(x, y, z, w) = (-s_psi s_th, c_psi s_th, s_psi c_th,
+    c_psi c_th)`` with half-angle sines/cosines.
+    """
+    n = p_base_m.shape[0]
+    q = np.empty((n, ws.model.nq))
+    root = ws.robot.n_root_q
+    q[:, root:] = joint_pos_rad
+    if ws.planar:
+        q[:, 0], q[:, 1], q[:, 2] = p_base_m[:, 0], p_base_m[:, 2], pitch_rad
+        return q
+    cz, sz = np.cos(0.5 * yaw_rad), np.sin(0.5 * yaw_rad)
+    ct, st = math.cos(0.5 * pitch_rad), math.sin(0.5 * pitch_rad)
+    q[:, 0:3] = p_base_m
+    q[:, 3], q[:, 4], q[:, 5], q[:, 6] = -sz * st, cz * st, sz * ct, cz * ct
+    return q
+
+
+def _heading_displacement(
+    v_xy_mps: np.ndarray, yaw0_rad: float, yaw_rate_radps: float, t_s: np.ndarray
+) -> np.ndarray:
+    """(N, 2) ``int_0^t R_z(yaw0 + omega s) v ds``: the chord ``R_z(yaw0 + omega t/2) v t
+    sinc(omega t / 2)`` of the commanded arc (exact for constant v, omega)."""
+    half = 0.5 * yaw_rate_radps * t_s
+    mid = yaw0_rad + half
+    scale = t_s * np.sinc(half / np.pi)  # np.sinc(x) = sin(pi x) / (pi x)
+    c, s = np.cos(mid), np.sin(mid)
+    vx, vy = v_xy_mps
+    return np.stack([(c * vx - s * vy) * scale, (s * vx + c * vy) * scale], axis=1)
+
+
+def _wrap(angle_rad: np.ndarray) -> np.ndarray:
+    return np.arctan2(np.sin(angle_rad), np.cos(angle_rad))
+
+
+# ----------------------------------------------------------------------- foot timeline
+@dataclass(frozen=True)
+class _Swing:
+    """One swing of one foot inside the horizon (times relative to now)."""
+
+    first_stage: int
+    t_liftoff_s: float
+    t_touchdown_s: float
+
+
+@dataclass(frozen=True)
+class _FootTimeline:
+    """Per-boundary foothold index and swing phase of one foot, and its swings."""
+
+    index: np.ndarray  # (h+1,) int
+    phase: np.ndarray  # (h+1,) float in [0, 1]
+    swings: tuple[_Swing, ...]
+
+
+def _foot_timeline(
+    timing: ReferenceTiming, foot_col: int, times_s: np.ndarray, time_in_swing_s: float
+) -> _FootTimeline:
+    """Split one contact column into stance / swing segments (see module docstring).
+
+    ``time_in_swing_s``: how long ago a foot swinging in stage 0 lifted off [s].
+    """
+    c = timing.contact[:, foot_col]  # (h,)
+    h = c.size
+    change = np.flatnonzero(c[1:] != c[:-1]) + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change, [h]])
+    index = np.zeros(h + 1, dtype=np.int64)
+    phase = np.zeros(h + 1)
+    swings: list[_Swing] = []
+    j = 0
+    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+        if c[a]:  # stance on F_j over boundaries a..b
+            index[a : b + 1] = j
+            phase[a : b + 1] = 0.0
+            continue
+        t_lo = -time_in_swing_s if a == 0 else float(times_s[a])
+        if b < h:
+            t_td = float(times_s[b])
+        else:
+            full = timing.full_dts_s[a]  # type: ignore[index]
+            t_td = max(t_lo + timing.stages_per_step * float(full), float(times_s[h]))
+        duration = max(t_td - t_lo, 1e-12)
+        index[a : b + 1] = j
+        phase[a : b + 1] = np.clip((times_s[a : b + 1] - t_lo) / duration, 0.0, 1.0)
+        swings.append(_Swing(a, t_lo, t_td))
+        j += 1
+    return _FootTimeline(index, phase, tuple(swings))
+
+
+def _stacked_index(
+    index: np.ndarray, footholds: dict[str, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Footholds of both feet stacked (n_l + n_r, 3), and per boundary the stacked row of
+    ``F_j`` and of ``F_{j+1}`` (clipped to the foot's last foothold), each (h+1, 2)."""
+    sizes = np.array([footholds[f].shape[0] for f in FEET])
+    offset = np.concatenate([[0], np.cumsum(sizes)[:-1]])  # (2,)
+    stacked = np.concatenate([footholds[f] for f in FEET])
+    j0 = index + offset
+    j1 = np.minimum(j0 + 1, offset + sizes - 1)
+    return stacked, j0, j1
+
+
+def _foot_paths(
+    ws: ReferenceWorkspace,
+    index: np.ndarray,
+    phase: np.ndarray,
+    footholds: dict[str, np.ndarray],
+    foothold_yaw: dict[str, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """(h+1, 2, 3) foot positions and (h+1, 2) headings from the timeline (both feet in
+    one vectorised :func:`swing_profile` call)."""
+    stacked, j0, j1 = _stacked_index(index, footholds)  # (n_fh, 3), (h+1, 2) x2
+    n = index.shape[0]
+    apex = ws.config.swing_apex_height_m
+    p_foot = swing_profile(stacked[j0.ravel()], stacked[j1.ravel()], phase.ravel(), apex)
+    if ws.planar:
+        return p_foot.reshape(n, _N_FEET, 3), np.zeros((n, _N_FEET))
+    yaws = np.concatenate([foothold_yaw[f] for f in FEET])
+    y0 = yaws[j0]
+    yaw = y0 + _wrap(yaws[j1] - y0) * _min_jerk(phase)
+    return p_foot.reshape(n, _N_FEET, 3), yaw
+
+
+# -------------------------------------------------------------------- core solve
+def _solve(
+    ws: ReferenceWorkspace,
+    timing: ReferenceTiming,
+    p_foot_m: np.ndarray,
+    foot_yaw_rad: np.ndarray,
+    p_com_target_m: np.ndarray,
+    p_base_guess_m: np.ndarray,
+    yaw_rad: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Trunk placement by the CoM fixed point + whole-body IK.
+
+    Returns:
+        q (h+1, nq), p_base (h+1, 3), rot (h+1, 3, 3), reachable (h+1,).
+    """
+    cfg = ws.config
+    rot = _rotations(yaw_rad, cfg.trunk_pitch_rad)  # (h+1, 3, 3)
+    targets = {f: p_foot_m[:, i] for i, f in enumerate(FEET)}
+    yaw_targets = None
+    if not ws.planar and np.max(np.abs(_wrap(foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
+        yaw_targets = {f: foot_yaw_rad[:, i] for i, f in enumerate(FEET)}  # else q0 = 0
+    p_base = p_base_guess_m.copy()
+    for it in range(cfg.com_iterations + 1):
+        sol = whole_body_ik(
+            ws.robot, p_base, rot, targets, foot_yaw_rad=yaw_targets, geometries=ws.geometries
+        )
+        q = _configurations(ws, p_base, yaw_rad, cfg.trunk_pitch_rad, sol.joint_pos_rad)
+        if it == cfg.com_iterations:
+            return q, p_base, rot, sol.reachable
+        err = p_com_target_m - ws._com(q)  # (h+1, 3)
+        if ws.planar:
+            err[:, 1] = 0.0
+        p_base = p_base + err / ws.com_gain
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _finish(
+    ws: ReferenceWorkspace,
+    timing: ReferenceTiming,
+    q: np.ndarray,
+    p_base: np.ndarray,
+    rot: np.ndarray,
+    yaw_rad: np.ndarray,
+    reachable: np.ndarray,
+    p_foot: np.ndarray,
+    foot_yaw: np.ndarray,
+    footholds: dict[str, np.ndarray],
+    foothold_yaw: dict[str, np.ndarray],
+    index: np.ndarray,
+    phase: np.ndarray,
+    time_in_swing_s: np.ndarray,
+    yaw_rate_radps: float,
+    pose0_angular: np.ndarray,
+) -> CentroidalReference:
+    """v_ref by finite differences, h_ref (eq. 11), p_com_ref, H_ref (eq. 12 / 30)."""
+    model, data = ws.model, ws.data
+    times = timing.times_s  # (h+1,)
+    n = times.size
+    root = ws.robot.n_root_q
+    d_mat = timing.derivative_matrix  # (h+1, h+1)
+    v = np.empty((n, model.nv))
+    v[:, ws.robot.n_root_dofs :] = d_mat @ q[:, root:]
+    if ws.planar:  # Euclidean root: v = dq/dt
+        v[:, :3] = d_mat @ q[:, :3]
+    else:  # local free-flyer velocity: R^T dp/dt, R^T e_z dpsi/dt
+        p_dot = d_mat @ p_base  # (h+1, 3)
+        yaw_dot = d_mat @ yaw_rad  # (h+1,), yaw_rad is continuous (not wrapped)
+        v[:, 0:3] = np.einsum("kji,kj->ki", rot, p_dot)
+        v[:, 3:6] = rot[:, 2, :] * yaw_dot[:, None]  # R^T e_z = third row of R
+    h_ref = np.empty((n, 6))
+    p_com = np.empty((n, 3))
+    for k in range(n):
+        hg = pin.computeCentroidalMomentum(model, data, q[k], v[k])
+        h_ref[k, :3], h_ref[k, 3:] = hg.linear, hg.angular
+        p_com[k] = data.com[0]
+    dts = timing.dts_s
+    pose0 = np.concatenate([ws.mass_kg * p_com[0], pose0_angular])
+    if ws.config.pose_method == "eq30":
+        h_pose = centroidal_pose_eq30(
+            model, q, v, np.append(dts, 0.0), data=data, subtract_initial=True
+        )
+        h_pose = h_pose - h_pose[0] + pose0
+    else:
+        h_pose = centroidal_pose_riemann(h_ref, np.append(dts, 0.0), pose0)
+        h_pose[:, :3] = ws.mass_kg * p_com  # exact primitive of the linear momentum
+    return CentroidalReference(
+        q_ref=q,
+        v_ref=v,
+        h_ref=h_ref,
+        H_ref=h_pose,
+        p_foot_ref=p_foot,
+        p_com_ref=p_com,
+        reachable=np.asarray(reachable, dtype=bool),
+        dts_s=np.array(dts),
+        times_s=times,
+        p_base_ref=p_base,
+        rot_base_ref=rot,
+        yaw_ref_rad=yaw_rad,
+        foot_yaw_ref_rad=foot_yaw,
+        footholds_m=footholds,
+        foothold_yaw_rad=foothold_yaw,
+        foothold_index=index,
+        swing_phase=phase,
+        timing=timing,
+        time_in_swing_s=time_in_swing_s,
+        yaw_rate_radps=yaw_rate_radps,
+        pose0_angular_kgm2=pose0_angular,
+        workspace=ws,
+    )
+
+
+# ----------------------------------------------------------------------- input parsing
+def _command(command: ArrayLike | CommandLike, planar: bool) -> tuple[np.ndarray, float]:
+    if hasattr(command, "vx_mps"):
+        cmd: CommandLike = command  # type: ignore[assignment]
+        vx, vy, wz = cmd.vx_mps, cmd.vy_mps, cmd.yaw_rate_radps
+    else:
+        c = np.asarray(command, dtype=float).reshape(-1)
+        if c.shape != (3,):
+            raise ConfigError("command", command, "(vx [m/s], vy [m/s], yaw_rate [rad/s])")
+        vx, vy, wz = c
+    v = np.array([vx, vy], dtype=float)
+    if not (np.all(np.isfinite(v)) and math.isfinite(wz)):
+        raise ConfigError("command", command, "finite (vx, vy, yaw_rate)")
+    if planar:
+        return np.array([float(vx), 0.0]), 0.0
+    return v, float(wz)
+
+
+def _point(value: ArrayLike, name: str) -> np.ndarray:
+    p = np.asarray(value, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ConfigError(name, value, "a finite (3,) point [m]")
+    return p.copy()
+
+
+def _targets(footholds: Mapping[str, ArrayLike] | None, foot: str) -> np.ndarray:
+    if footholds is None or foot not in footholds:
+        return np.empty((0, 3))
+    t = np.asarray(footholds[foot], dtype=float)
+    t = t.reshape(1, 3) if t.shape == (3,) else t
+    if t.ndim != 2 or t.shape[1] != 3 or not np.all(np.isfinite(t)):
+        raise ConfigError(f"footholds[{foot!r}]", footholds[foot], "(n, 3) or (3,) points [m]")
+    return t
+
+
+def _workspace(
+    robot: RobotModel, workspace: ReferenceWorkspace | None, config: ReferenceConfig | None
+) -> ReferenceWorkspace:
+    if workspace is None:
+        return ReferenceWorkspace(robot, config)
+    if workspace.robot is not robot:
+        raise ConfigError("workspace", workspace, f"a ReferenceWorkspace of {robot.name}")
+    if config is not None and config != workspace.config:
+        raise ConfigError("config", config, "None or the workspace's config")
+    return workspace
+
+
+def _neutral_foothold(
+    ws: ReferenceWorkspace,
+    foot: str,
+    p_com_start_m: np.ndarray,
+    v_cmd_mps: np.ndarray,
+    yaw0_rad: float,
+    yaw_rate_radps: float,
+    swing: _Swing,
+    t_step_s: float,
+    previous_m: np.ndarray,
+) -> np.ndarray:
+    """(3,) fallback touchdown target: ``p_c(t_td) + R_z(psi_td) (0, y_nom) + v T / 2`` in
+    x-y (commanded CoM path, Raibert neutral point without feedback), previous height."""
+    t_td = np.array([swing.t_touchdown_s])
+    p_c = p_com_start_m[:2] + _heading_displacement(v_cmd_mps, yaw0_rad, yaw_rate_radps, t_td)[0]
+    yaw_td = yaw0_rad + yaw_rate_radps * swing.t_touchdown_s
+    c, s = math.cos(yaw_td), math.sin(yaw_td)
+    lat = ws.foot_lateral_m[foot]
+    v_world = np.array([c * v_cmd_mps[0] - s * v_cmd_mps[1], s * v_cmd_mps[0] + c * v_cmd_mps[1]])
+    out = previous_m.copy()
+    out[:2] = p_c + np.array([-s * lat, c * lat]) + 0.5 * t_step_s * v_world
+    if ws.planar:
+        out[1] = previous_m[1]
+    return out
+
+
+# ------------------------------------------------------------------------------- f_ref
+def make_reference(
+    robot: RobotModel,
+    q_now: ArrayLike,
+    timing: ReferenceTiming | GaitHorizon,
+    command: ArrayLike | CommandLike,
+    footholds: Mapping[str, ArrayLike] | None = None,
+    *,
+    p_foot_now_m: Mapping[str, ArrayLike] | None = None,
+    p_liftoff_m: Mapping[str, ArrayLike] | None = None,
+    p_com_start_m: ArrayLike | None = None,
+    pose0_angular_kgm2: ArrayLike | None = None,
+    workspace: ReferenceWorkspace | None = None,
+    config: ReferenceConfig | None = None,
+) -> CentroidalReference:
+    """Reference trajectory ``f_ref`` (Algorithm 1, lines 2-3; module docstring).
+
+    Typical use, once per MPC solve::
+
+        ws = ReferenceWorkspace(robot)                   # once per controller
+        ref = make_reference(robot, q, ReferenceTiming.from_horizon(schedule.horizon()),
+                             command, {swing: [target], stance: [next_target]},
+                             p_liftoff_m={swing: liftoff}, workspace=ws)
+        ...                                              # sequential loop (Alg. 1)
+        ref = update_reference(robot, ref, p_foot_iter, p_com_iter, dts_new)
+
+    Args:
+        robot: ``humanoid3d`` or ``biped2d``.
+        q_now: (nq,) measured Pinocchio configuration; gives the current CoM, trunk
+            heading and (by forward kinematics) the current foot positions and headings.
+            The measured velocity is not needed: the reference follows the command, the
+            measured momentum enters the MPC as ``x_0 = f_j2m(q, v)``.
+        timing: stage timing and contact sequence (:class:`ReferenceTiming`); a
+            :class:`gaitnet_mpc.gait.GaitHorizon` is converted with
+            ``ReferenceTiming.from_horizon(timing)`` (``h' = 5``, boundary 0 = now).
+        command: ``(vx [m/s], vy [m/s], yaw_rate [rad/s])`` with ``(vx, vy)`` in the heading
+            (yaw) frame, or an object with ``vx_mps, vy_mps, yaw_rate_radps``
+            (:class:`gaitnet_mpc.sim.episode.Command`). The biped uses ``vx`` only.
+        footholds: foot -> touchdown targets (n, 3) or (3,) [m] of that foot's upcoming
+            swings in the horizon, in order: for the foot swinging now its current target,
+            for the standing foot its next foothold, and so on. A missing target is
+            replaced by the neutral point ``p_c(t_td) + R_z(psi(t_td)) (0, y_nom, 0) +
+            v_cmd T_step / 2`` at the previous foothold's height (``y_nom`` the nominal
+            lateral foot offset); controllers should pass their planned footholds.
+        p_foot_now_m: foot -> (3,) current foot-centre positions [m]; None or a missing
+            foot: forward kinematics of ``q_now``. Standing feet stay there.
+        p_liftoff_m: foot -> (3,) lift-off point of a foot swinging in stage 0 [m]; a
+            missing one falls back to the current position and the swing restarts now
+            (``time_in_step_s`` treated as 0 for that foot).
+        p_com_start_m: (3,) start of the CoM path [m] (x, y used; the height is always
+            ``ground + com_height_m``); None: the CoM of ``q_now``.
+        pose0_angular_kgm2: (3,) angular part of the measured centroidal pose ``H_0``
+            [kg m^2] (the MPC's convention); None: zeros.
+        workspace: per-robot scratch and constants (:class:`ReferenceWorkspace`); None:
+            built here (slow, milliseconds).
+        config: None or the workspace's config (used to build a workspace if none given).
+
+    Returns:
+        :class:`CentroidalReference` with ``h + 1`` boundaries.
+    """
+    ws = _workspace(robot, workspace, config)
+    if isinstance(timing, GaitHorizon):
+        timing = ReferenceTiming.from_horizon(timing)
+    q_now = np.asarray(q_now, dtype=float).reshape(-1)
+    if q_now.shape != (ws.model.nq,) or not np.all(np.isfinite(q_now)):
+        raise ConfigError("q_now", q_now, f"a finite ({ws.model.nq},) Pinocchio configuration")
+    v_cmd, yaw_rate = _command(command, ws.planar)
+    times = timing.times_s  # (h+1,)
+    n = times.size
+
+    # measured state: CoM, trunk heading, feet (forward kinematics)
+    com_now = np.array(pin.centerOfMass(ws.model, ws.data, q_now, False))
+    pin.updateFramePlacements(ws.model, ws.data)
+    if ws.planar:
+        yaw0 = 0.0
+    else:
+        rot_now = pin.Quaternion(q_now[3:7]).normalized().toRotationMatrix()
+        yaw0 = float(math.atan2(rot_now[1, 0], rot_now[0, 0]))
+    fk_pos: dict[str, np.ndarray] = {}
+    fk_yaw: dict[str, float] = {}
+    for f in FEET:
+        placement = ws.data.oMf[robot.pin_foot_frame_ids[f]]
+        fk_pos[f] = placement.translation.copy()
+        fk_yaw[f] = float(math.atan2(placement.rotation[1, 0], placement.rotation[0, 0]))
+    p_now = {
+        f: _point(p_foot_now_m[f], f"p_foot_now_m[{f!r}]")
+        if p_foot_now_m is not None and f in p_foot_now_m
+        else fk_pos[f]
+        for f in FEET
+    }
+
+    # CoM target path (module docstring) and trunk heading
+    start = com_now if p_com_start_m is None else _point(p_com_start_m, "p_com_start_m")
+    stance0 = [f for i, f in enumerate(FEET) if timing.contact[0, i]] or list(FEET)
+    ground_z = float(np.mean([p_now[f][2] for f in stance0])) - ws.contact_radius_m
+    p_com_des = np.empty((n, 3))
+    p_com_des[:, :2] = start[:2] + _heading_displacement(v_cmd, yaw0, yaw_rate, times)
+    p_com_des[:, 2] = ground_z + ws.com_height_m
+    if ws.planar:
+        p_com_des[:, 1] = com_now[1]
+    yaw = yaw0 + yaw_rate * times  # (h+1,)
+
+    # footholds and foot timelines
+    index = np.empty((n, _N_FEET), dtype=np.int64)
+    phase = np.empty((n, _N_FEET))
+    time_in_swing = np.zeros(_N_FEET)
+    fh_all: dict[str, np.ndarray] = {}
+    fh_yaw: dict[str, np.ndarray] = {}
+    for i, f in enumerate(FEET):
+        first: np.ndarray = p_now[f]
+        if not timing.contact[0, i] and p_liftoff_m is not None and f in p_liftoff_m:
+            first = _point(p_liftoff_m[f], f"p_liftoff_m[{f!r}]")
+            time_in_swing[i] = timing.time_in_step_s
+        line = _foot_timeline(timing, i, times, float(time_in_swing[i]))
+        index[:, i], phase[:, i] = line.index, line.phase
+        given = _targets(footholds, f)
+        pts = [first]
+        yaws = [fk_yaw[f]]
+        for s_i, sw in enumerate(line.swings):
+            yaw_td = yaw0 + yaw_rate * sw.t_touchdown_s
+            if s_i < given.shape[0]:
+                pts.append(given[s_i].copy())
+            else:
+                t_step = timing.stages_per_step * float(timing.full_dts_s[sw.first_stage])  # type: ignore[index]
+                pts.append(
+                    _neutral_foothold(ws, f, start, v_cmd, yaw0, yaw_rate, sw, t_step, pts[-1])
+                )
+            yaws.append(yaw_td)
+        fh_all[f] = np.array(pts)
+        fh_yaw[f] = np.unwrap(np.array(yaws))
+    p_foot, foot_yaw = _foot_paths(ws, index, phase, fh_all, fh_yaw)
+
+    rot = _rotations(yaw, ws.config.trunk_pitch_rad)
+    p_base0 = p_com_des - rot @ ws.com_offset_trunk_m  # nominal trunk-to-CoM offset
+    q, p_base, rot, ok = _solve(ws, timing, p_foot, foot_yaw, p_com_des, p_base0, yaw)
+    pose0 = (
+        np.zeros(3)
+        if pose0_angular_kgm2 is None
+        else np.asarray(pose0_angular_kgm2, dtype=float).reshape(3).copy()
+    )
+    return _finish(
+        ws,
+        timing,
+        q,
+        p_base,
+        rot,
+        yaw,
+        ok,
+        p_foot,
+        foot_yaw,
+        fh_all,
+        fh_yaw,
+        index,
+        phase,
+        time_in_swing,
+        yaw_rate,
+        pose0,
+    )
+
+
+# -------------------------------------------------------------------------------- f_IK
+def _footholds_from_iterates(ref: CentroidalReference, p_iter: np.ndarray) -> dict[str, np.ndarray]:
+    """New footholds: each foothold's mean iterate over the rows where the foot stands on
+    it. Row ``k`` is read iff the foot is in contact in stage ``k`` (row ``h`` of a
+    boundary array: stage ``h - 1``), so a swinging foot's row is never read. Footholds
+    without such a row keep their value; the biped keeps y."""
+    h = ref.horizon
+    contact = ref.timing.contact  # (h, 2)
+    if p_iter.shape == (h + 1, _N_FEET, 3):
+        rows = h + 1
+        on_ground = np.concatenate([contact, contact[-1:]])  # (h+1, 2)
+    elif p_iter.shape == (h, _N_FEET, 3):
+        rows = h
+        on_ground = contact
+    else:
+        raise ConfigError(
+            "p_foot_iter_m", p_iter.shape, f"({h + 1}, 2, 3) or ({h}, 2, 3) foot iterates [m]"
+        )
+    stacked, j0, _ = _stacked_index(ref.foothold_index[:rows], ref.footholds_m)
+    j = (j0 + (ref.swing_phase[:rows] == 1.0))[on_ground]  # (n_on,) stacked foothold rows
+    n_fh = stacked.shape[0]
+    counts = np.bincount(j, minlength=n_fh)  # (n_fh,)
+    onehot = np.zeros((j.size, n_fh))
+    onehot[np.arange(j.size), j] = 1.0
+    sums = onehot.T @ p_iter[on_ground]  # (n_fh, 3)
+    new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], stacked)
+    if ref.workspace.planar:
+        new[:, 1] = stacked[:, 1]
+    out: dict[str, np.ndarray] = {}
+    start = 0
+    for f in FEET:
+        size = ref.footholds_m[f].shape[0]
+        out[f] = new[start : start + size]
+        start += size
+    return out
+
+
+def update_reference(
+    robot: RobotModel,
+    ref: CentroidalReference,
+    p_foot_iter_m: ArrayLike | Mapping[str, ArrayLike] | None,
+    p_com_iter_m: ArrayLike | None,
+    dts_s: ArrayLike | None = None,
+) -> CentroidalReference:
+    """Re-solve the reference from the MPC iterate: ``f_IK`` (Algorithm 1, line 9; Remark 1).
+
+    Keeps the contact sequence, the trunk heading law and the swing shape of ``ref``;
+    moves the footholds to the iterates, places the trunk so that the CoM of every stage
+    goes to ``p_com_iter_m`` (start: the previous reference's trunk-to-CoM offset, then
+    ``config.com_iterations`` fixed-point corrections), re-runs the analytic IK and
+    recomputes ``v_ref``, ``h_ref`` (eq. 11), ``p_com_ref`` and ``H_ref`` (eq. 12 / 30).
+
+    Args:
+        robot: the robot of ``ref``.
+        ref: the previous reference (from :func:`make_reference` or this function); its
+            workspace is reused.
+        p_foot_iter_m: foothold iterates ``p_f^j``: (h+1, 2, 3) at the boundaries or
+            (h, 2, 3) per stage [m]. Row ``k`` of a foot is read only if the foot is in
+            contact in stage ``k`` (row ``h``: stage ``h - 1``); a swinging foot's rows are
+            ignored. Each foothold becomes the mean of its rows, and swing feet move toward
+            the new touchdown point along the same swing shape. Footholds with no row in
+            contact keep their value (the lift-off point of the foot swinging now).
+            Or a mapping foot -> (n, 3) new touchdown targets (as in :func:`make_reference`,
+            ``F_1, F_2, ...``). None keeps the footholds. The biped ignores y.
+        p_com_iter_m: (h+1, 3) CoM iterate ``p_c^j`` [m]; None keeps ``ref.p_com_ref``.
+            The biped ignores y.
+        dts_s: (h,) new stage durations (Gait-Net, Alg. 1 line 8) [s]; None keeps them.
+            Swing phases are recomputed on the new stage times.
+
+    Returns:
+        A new :class:`CentroidalReference` (``ref`` is not modified).
+    """
+    ws = ref.workspace
+    if ws.robot is not robot:
+        raise ConfigError("robot", robot.name, "the robot the reference was made for")
+    h = ref.horizon
+    timing = ref.timing if dts_s is None else ref.timing.with_dts(dts_s)
+    times = timing.times_s
+
+    # footholds
+    if p_foot_iter_m is None:
+        footholds = ref.footholds_m
+    elif isinstance(p_foot_iter_m, Mapping):
+        footholds = {}
+        for f in FEET:
+            old = ref.footholds_m[f]
+            new = _targets(p_foot_iter_m, f)[: old.shape[0] - 1]
+            fh = old.copy()
+            fh[1 : 1 + new.shape[0]] = new
+            if ws.planar:
+                fh[:, 1] = old[:, 1]
+            footholds[f] = fh
+    else:
+        p_iter = np.asarray(p_foot_iter_m, dtype=float)
+        if not np.all(np.isfinite(p_iter)):
+            raise ConfigError("p_foot_iter_m", "non-finite", "finite foot iterates [m]")
+        footholds = _footholds_from_iterates(ref, p_iter)
+
+    # timing-dependent quantities: swing phases, trunk heading, foothold headings
+    if dts_s is None:
+        index, phase = ref.foothold_index, ref.swing_phase
+        yaw = ref.yaw_ref_rad
+        fh_yaw = ref.foothold_yaw_rad
+    else:
+        index = np.empty_like(ref.foothold_index)
+        phase = np.empty_like(ref.swing_phase)
+        yaw = ref.yaw_ref_rad[0] + ref.yaw_rate_radps * times
+        fh_yaw = {}
+        for i, f in enumerate(FEET):
+            line = _foot_timeline(timing, i, times, float(ref.time_in_swing_s[i]))
+            index[:, i], phase[:, i] = line.index, line.phase
+            yaws = ref.foothold_yaw_rad[f].copy()
+            for s_i, sw in enumerate(line.swings):
+                yaws[s_i + 1] = yaw[0] + ref.yaw_rate_radps * sw.t_touchdown_s
+            fh_yaw[f] = yaws
+    p_foot, foot_yaw = _foot_paths(ws, index, phase, footholds, fh_yaw)
+
+    # CoM target and the initial trunk guess from the previous trunk-to-CoM offsets
+    if p_com_iter_m is None:
+        p_com_target = ref.p_com_ref.copy()
+    else:
+        p_com_target = np.array(p_com_iter_m, dtype=float)
+        if p_com_target.shape != (h + 1, 3) or not np.all(np.isfinite(p_com_target)):
+            raise ConfigError("p_com_iter_m", p_com_iter_m, f"a finite ({h + 1}, 3) CoM path [m]")
+        if ws.planar:
+            p_com_target[:, 1] = ref.p_com_ref[:, 1]
+    # previous trunk-to-CoM offset, corrected to first order for the leg folding and for
+    # the CoM shift that the foot moves cause
+    d_com = (
+        p_com_target
+        - ref.p_com_ref
+        - np.einsum("fi,kfi->ki", ws.com_gain_feet, p_foot - ref.p_foot_ref)
+    )
+    p_base0 = ref.p_base_ref + d_com / ws.com_gain
+    q, p_base, rot, ok = _solve(ws, timing, p_foot, foot_yaw, p_com_target, p_base0, yaw)
+    return _finish(
+        ws,
+        timing,
+        q,
+        p_base,
+        rot,
+        yaw,
+        ok,
+        p_foot,
+        foot_yaw,
+        footholds,
+        fh_yaw,
+        index,
+        phase,
+        ref.time_in_swing_s,
+        ref.yaw_rate_radps,
+        ref.pose0_angular_kgm2,
+    )
