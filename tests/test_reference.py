@@ -70,10 +70,9 @@ def _walk(
     swing, stance = sched.swing_foot, sched.stance_foot
     c0 = float(pin.centerOfMass(s.robot.pin_model, s.robot.pin_model.createData(), s.q)[0])
     t_td = STEP_S - t_s  # touchdown of the swing foot
-    footholds = {
-        swing: np.array([s.feet[swing] + [c0 + vx * (t_td + 0.5 * STEP_S) - 0.015, 0, 0]]),
-        stance: np.array([s.feet[stance] + [c0 + vx * (t_td + 1.5 * STEP_S) - 0.015, 0, 0]]),
-    }
+    footholds = {swing: s.feet[swing].copy()[None], stance: s.feet[stance].copy()[None]}
+    footholds[swing][0, 0] = c0 + vx * (t_td + 0.5 * STEP_S)
+    footholds[stance][0, 0] = c0 + vx * (t_td + 1.5 * STEP_S)
     ref = make_reference(
         s.robot,
         s.q,
@@ -117,7 +116,7 @@ def test_standing_double_support_has_zero_momentum(setup: Setup) -> None:
         np.testing.assert_allclose(ref.p_foot_ref[:, i], np.tile(setup.feet[f], (11, 1)))
 
 
-def test_standing_single_stance_has_zero_momentum(humanoid: Setup) -> None:
+def test_standing_single_stance_has_zero_momentum() -> None:
     """Single-stance horizon (one step): with the swing foot's target at its current
     position and no apex the swing foot does not move, so the momentum is zero."""
     s = _setup("humanoid3d", ReferenceConfig(swing_apex_height_m=0.0))
@@ -135,10 +134,10 @@ def test_forward_command_moves_com_at_commanded_speed(setup: Setup) -> None:
     """p_com_ref advances by v t and l_x = m v.
 
     Tolerances: p_com_ref is the exact CoM of q_ref, which the one-step fixed point puts on
-    the commanded path up to a residual eps (< 1 mm, checked). The FD velocity of the
-    configuration path differentiates that residual too, so |l_x - m v| <= m * (max
-    change of eps between neighbours) / min dt + O(dt^2) curvature terms (the 3-point
-    rule is exact for the straight CoM path itself); the bound below uses 2 max|eps|.
+    the commanded path up to a residual eps (< 1 mm, checked). l = m J_c(q) v_ref with
+    v_ref the 3-point derivative D q of the configuration path, i.e. m D p_com up to
+    O(dt^2) curvature terms (2 % of m v allowed), and D p_com = v + D eps (D is exact on
+    the straight path), |D eps| <= ||D||_inf max|eps|.
     """
     vx = 0.3
     ref, _, _ = _walk(setup, vx)
@@ -148,14 +147,14 @@ def test_forward_command_moves_com_at_commanded_speed(setup: Setup) -> None:
     assert np.abs(eps).max() < 1e-3
     ground_z = ref.p_foot_ref[0, 0, 2] - setup.robot.spec.foot_contact_radius_m
     np.testing.assert_allclose(ref.p_com_ref[:, 2], ground_z + setup.ws.com_height_m, atol=1e-3)
-    tol = m * 2.0 * np.abs(eps).max() * 2.0 / ref.dts_s.min() + 0.01 * m * vx
+    d_norm = np.abs(ref.timing.derivative_matrix).sum(axis=1).max()  # ||D||_inf = 4 / dt
+    tol = m * d_norm * np.abs(eps).max() + 0.02 * m * vx
     np.testing.assert_allclose(ref.h_ref[:, 0], m * vx, atol=tol)
-    assert tol < 0.1 * m * vx  # the bound is meaningful
-    # the measured residual is well inside the bound
+    assert tol < 0.15 * m * vx  # the bound is meaningful
     np.testing.assert_allclose(ref.h_ref[:, 0].mean(), m * vx, rtol=0.02)
 
 
-def test_com_iterations_tighten_the_com_path(humanoid: Setup) -> None:
+def test_com_iterations_tighten_the_com_path() -> None:
     s = _setup("humanoid3d", ReferenceConfig(com_iterations=2))
     vx = 0.3
     ref, _, _ = _walk(s, vx)
@@ -192,9 +191,12 @@ def test_partial_first_stage_mid_swing(humanoid: Setup) -> None:
     np.testing.assert_allclose(ref.timing.time_in_step_s, 0.06)
     i_sw = FEET.index(sched.swing_foot)
     traj = SwingTrajectory(s.feet[sched.swing_foot], footholds[sched.swing_foot][0], STEP_S)
+    # boundary 4 is the touchdown (0.06 s + 4 stages = one step); the foot then stands
     np.testing.assert_allclose(
-        ref.p_foot_ref[:, i_sw], traj.position(0.06 + ref.times_s), atol=1e-12
+        ref.p_foot_ref[:5, i_sw], traj.position(0.06 + ref.times_s[:5]), atol=1e-12
     )
+    target = footholds[sched.swing_foot][0]
+    np.testing.assert_array_equal(ref.p_foot_ref[4:10, i_sw], np.tile(target, (6, 1)))
     np.testing.assert_allclose(ref.swing_phase[0, i_sw], 0.06 / STEP_S)
     # step 2 starts inside the horizon: the first swing foot lifts off again toward a
     # neutral-point fallback target, and everything stays reachable
@@ -216,7 +218,7 @@ def test_swing_profile_matches_swing_trajectory() -> None:
 def test_configuration_and_velocity_conventions(humanoid: Setup) -> None:
     """q_ref is pin_configuration's; v_ref is Pinocchio's local velocity of the path."""
     s = humanoid
-    ref, _, _ = _walk(s, 0.3, yaw_rate=0.5)
+    ref, _, sched = _walk(s, 0.3, yaw_rate=0.5)
     assert ref.all_reachable
     q = pin_configuration(s.robot, ref.p_base_ref, ref.rot_base_ref, ref.q_ref[:, 7:])
     quat_sign = np.sign(np.sum(q[:, 3:7] * ref.q_ref[:, 3:7], axis=1))[:, None]
@@ -232,8 +234,17 @@ def test_configuration_and_velocity_conventions(humanoid: Setup) -> None:
         bwd = pin.difference(m, ref.q_ref[k], ref.q_ref[k - 1])
         v_fd = (fwd - bwd) / (ref.times_s[k + 1] - ref.times_s[k - 1])
         np.testing.assert_allclose(ref.v_ref[k, :6], v_fd[:6], atol=2e-3)
-    # the stance foot keeps its heading while the trunk turns: FK equals the targets
+    # the stance foot keeps its position and heading while the trunk turns
     np.testing.assert_allclose(_foot_fk(s, ref.q_ref), ref.p_foot_ref, atol=1e-8)
+    data = s.robot.pin_model.createData()
+    i_st = FEET.index(sched.stance_foot)
+    for k in range(6):
+        pin.framesForwardKinematics(s.robot.pin_model, data, ref.q_ref[k])
+        rot = data.oMf[s.robot.pin_foot_frame_ids[sched.stance_foot]].rotation
+        assert abs(np.arctan2(rot[1, 0], rot[0, 0])) < 1e-9
+        assert abs(ref.foot_yaw_ref_rad[k, i_st]) < 1e-12
+    # the swing foot lands facing the trunk heading at touchdown
+    np.testing.assert_allclose(ref.foot_yaw_ref_rad[5:, 1 - i_st], 0.5 * ref.times_s[5])
 
 
 # ------------------------------------------------------------------- centroidal pose
@@ -272,9 +283,7 @@ def _eq30_vs_riemann(name: str, refine: int) -> np.ndarray:
         n = 5 * refine
         contact = np.zeros((2 * n, 2), dtype=bool)
         contact[:n, 0] = contact[n:, 1] = True  # right swings first
-        timing = ReferenceTiming(
-            np.full(2 * n, DT_S / refine), contact, stages_per_step=n
-        )
+        timing = ReferenceTiming(np.full(2 * n, DT_S / refine), contact, stages_per_step=n)
         footholds = {"right": s.feet["right"] + [0.1, 0, 0], "left": s.feet["left"] + [0.2, 0, 0]}
         ref = make_reference(s.robot, s.q, timing, (0.4, 0, 0), footholds, workspace=s.ws)
         out.append(ref.H_ref[::refine])
@@ -292,22 +301,27 @@ def test_eq30_agrees_with_riemann_to_first_order(name: str) -> None:
 
 # ------------------------------------------------------------------------------ f_IK
 def test_update_moves_com_and_footholds(setup: Setup) -> None:
-    ref, footholds, sched = _walk(setup, 0.3)
+    ref, _, sched = _walk(setup, 0.3)
     shift = np.array([0.02, 0.0, 0.0])
     new = update_reference(setup.robot, ref, ref.p_foot_ref + shift, ref.p_com_ref + shift)
     np.testing.assert_allclose(new.p_com_ref - ref.p_com_ref, np.tile(shift, (11, 1)), atol=1e-3)
-    # every foothold the feet stand on moves; the swing foot's (past) lift-off point stays
-    i_sw = FEET.index(sched.swing_foot)
-    moved = ref.p_foot_ref + shift
-    moved[:5, i_sw] = new.p_foot_ref[:5, i_sw]
-    np.testing.assert_allclose(new.p_foot_ref, moved, atol=1e-12)
-    for f in FEET:
-        expected = ref.footholds_m[f] + shift
-        if f == sched.swing_foot:
-            expected[0] = ref.footholds_m[f][0]
-        np.testing.assert_allclose(new.footholds_m[f], expected, atol=1e-12)
-    traj = SwingTrajectory(ref.footholds_m[sched.swing_foot][0], moved[5, i_sw], STEP_S)
+    # every foothold a foot stands on inside the horizon moves with the iterate; the swing
+    # foot's past lift-off point and the stance foot's next target (touchdown after the
+    # horizon: no row in contact) keep their values
+    swing, stance = sched.swing_foot, sched.stance_foot
+    i_sw, i_st = FEET.index(swing), FEET.index(stance)
+    np.testing.assert_allclose(new.p_foot_ref[5:, i_sw], ref.p_foot_ref[5:, i_sw] + shift)
+    np.testing.assert_allclose(new.p_foot_ref[:6, i_st], ref.p_foot_ref[:6, i_st] + shift)
+    fh_sw, fh_st = ref.footholds_m[swing], ref.footholds_m[stance]
+    np.testing.assert_allclose(new.footholds_m[swing], [fh_sw[0], fh_sw[1] + shift])
+    np.testing.assert_allclose(new.footholds_m[stance], [fh_st[0] + shift, fh_st[1]])
+    # swings are re-interpolated between the new end points with the same shape
+    traj = SwingTrajectory(fh_sw[0], fh_sw[1] + shift, STEP_S)
     np.testing.assert_allclose(new.p_foot_ref[:6, i_sw], traj.position(ref.times_s[:6]), atol=1e-12)
+    traj = SwingTrajectory(fh_st[0] + shift, fh_st[1], STEP_S)
+    np.testing.assert_allclose(
+        new.p_foot_ref[5:, i_st], traj.position(ref.times_s[5:] - STEP_S), atol=1e-12
+    )
     assert new.all_reachable
     np.testing.assert_allclose(_foot_fk(setup, new.q_ref), new.p_foot_ref, atol=1e-8)
     np.testing.assert_allclose(new.H_ref[:, :3], setup.ws.mass_kg * new.p_com_ref, atol=1e-12)
@@ -357,9 +371,7 @@ def test_unreachable_foothold_is_flagged(setup: Setup) -> None:
     timing = ReferenceTiming.from_horizon(sched.horizon())
     swing = sched.swing_foot
     far = setup.feet[swing] + [1.0, 0.0, 0.0]
-    ref = make_reference(
-        setup.robot, setup.q, timing, (0, 0, 0), {swing: far}, workspace=setup.ws
-    )
+    ref = make_reference(setup.robot, setup.q, timing, (0, 0, 0), {swing: far}, workspace=setup.ws)
     assert ref.reachable[0]
     assert not ref.reachable[5:].any()  # standing on the far foothold
     assert np.all(np.isfinite(ref.q_ref)) and np.all(np.isfinite(ref.h_ref))
@@ -377,7 +389,8 @@ def test_biped_ignores_lateral_iterates() -> None:
     np.testing.assert_allclose(new.p_com_ref[:, 0] - ref.p_com_ref[:, 0], 0.02, atol=1e-3)
     np.testing.assert_allclose(new.p_com_ref[:, 1], ref.p_com_ref[:, 1])
     np.testing.assert_allclose(new.p_foot_ref[:, :, 1], ref.p_foot_ref[:, :, 1])
-    np.testing.assert_allclose(ref.h_ref[:, [1, 3, 5]], 0.0, atol=1e-9)
+    np.testing.assert_allclose(ref.h_ref[:, 1], 0.0, atol=1e-12)  # no lateral motion
+    assert new.all_reachable
 
 
 # --------------------------------------------------------------------------- inputs
@@ -407,7 +420,9 @@ def test_command_object_and_horizon_are_accepted(humanoid: Setup) -> None:
     s = humanoid
     hz = _schedule().horizon()
     a = make_reference(s.robot, s.q, hz, Command(), workspace=s.ws)
-    b = make_reference(s.robot, s.q, ReferenceTiming.from_horizon(hz), (0.3, 0, 0), {}, workspace=s.ws)
+    b = make_reference(
+        s.robot, s.q, ReferenceTiming.from_horizon(hz), (0.3, 0, 0), {}, workspace=s.ws
+    )
     np.testing.assert_array_equal(a.q_ref, b.q_ref)
     assert a.all_reachable  # neutral-point fallback footholds
 

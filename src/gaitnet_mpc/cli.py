@@ -8,7 +8,7 @@ import os
 import sys
 from pathlib import Path
 
-from gaitnet_mpc.errors import GaitNetMPCError
+from gaitnet_mpc.errors import ConfigError, GaitNetMPCError
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -25,6 +25,9 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("--vy", type=float, default=0.0, help="lateral velocity command [m/s]")
     run.add_argument("--yaw-rate", type=float, default=0.0, help="yaw-rate command [rad/s]")
     run.add_argument("--duration", type=float, default=10.0, help="simulated time [s]")
+    run.add_argument(
+        "--dt", type=float, default=None, help="fixed MPC sampling time [s] (step = 5 dt)"
+    )
     run.add_argument(
         "--push",
         action="append",
@@ -55,7 +58,14 @@ def _run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     params = {"seed": args.seed} if args.course == "uneven" else {}
     course = load_course(args.course, **params)
-    controller = make_controller(args.controller, ControllerContext(robot, course, command, {}))
+    options = {}
+    if args.dt is not None:
+        if not (0.03 <= args.dt <= 0.2):
+            raise ConfigError("--dt", args.dt, "a sampling time in [0.03, 0.2] s")
+        options["dt_s"] = args.dt
+    controller = make_controller(
+        args.controller, ControllerContext(robot, course, command, options)
+    )
     sim = Simulator(robot, course, SimConfig(payload_kg=args.payload_kg, pushes=pushes))
     out = args.out or Path("runs") / time.strftime("%Y%m%d-%H%M%S")
     meta = {

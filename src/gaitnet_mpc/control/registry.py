@@ -37,7 +37,17 @@ def _srbm(ctx: ControllerContext) -> Controller:
     return SRBMWalkController(ctx.robot, ctx.course, ctx.command, config)
 
 
+def _kd(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.mpc.sequential import FixedDt
+
+    dt_s = ctx.options.get("dt_s")
+    policy = FixedDt() if dt_s is None else FixedDt(dt_s)
+    return KDWalkController(ctx.robot, ctx.course, ctx.command, dt_policy=policy)
+
+
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
+    "kd": _kd,
     "stand": _stand,
     "srbm": _srbm,
 }

@@ -1,13 +1,40 @@
 """``srbm``: walking with the SRBM convex MPC, fixed gait frequency and heuristic footholds.
 
 Per control tick (1 kHz): advance the gait schedule; at each step start, plan the swing
-foot's foothold (Raibert heuristic) and its swing trajectory; every ``replan_period_s``
-(and at each step start) solve the SRBM MPC over the next two steps; send the first
-stage's stance wrench and the swing target to the low-level controller.
+foot's foothold (Raibert heuristic evaluated at the LIP-predicted touchdown state) and its
+swing trajectory; every ``replan_period_s`` (and at each step start or touchdown) solve the
+SRBM MPC over the next two steps; send the first stage's stance wrenches and the swing
+target to the low-level controller.
+
+Design notes (the reasons behind the settings of :class:`SRBMWalkConfig`):
+
+* **Footholds from the linear inverted pendulum (LIP).** With line feet and no ankle roll,
+  the stance foot cannot exert a moment about its long axis, so sideways the robot is a
+  point-foot pendulum that only foot placement stabilises. The Raibert law
+  ``p = p_hip + v T/2 + k_v (v - v_cmd)`` is evaluated with the CoM position and velocity
+  *predicted at touchdown* by the LIP about the stance foot (closed form, ``omega =
+  sqrt(g / z0)``), not with the current ones. Its gain is the LIP deadbeat gain
+  ``T/2 + k_v = coth(omega T) / omega`` (one step cancels a velocity error), and its lateral
+  offset is chosen so that the heuristic's fixed point is the period-2 sway orbit of a
+  stance half-width ``d``: ``hip_lateral_offset = d (1 - tanh^2(omega T / 2)) / 2``. With
+  the geometric hip offset (0.065 m) instead, the same law converges to a 0.2 m half-width
+  with +-0.4 m/s of lateral sway, which made the robot trip over its own feet at 1 m/s.
+* **Measured touchdown.** A swing foot that touches the ground in the second half of its
+  swing is switched to stance at once: the MPC gets it as a second contact for the rest of
+  the step (double support) and the low-level controller maps its wrench through ``J^T``
+  instead of pressing it into the ground with the swing PD. Scheduled touchdowns are
+  slightly early by design (the swing ends 5 mm below the ground at 0.3 m/s), so without
+  this every step began with an uncontrolled braking impulse.
+* **Commanded path with anti-windup.** The CoM path is the integral of the (ramped) velocity
+  command along the commanded heading, integrated every tick so turning is exact. It is kept
+  within ``path_max_error_m`` of the CoM (anti-windup), so after a push the robot resumes
+  the commanded velocity instead of walking back to where it was.
+* **Wrench regularised about m g** (see :class:`SRBMConfig`), which removes the CoM sag.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -26,7 +53,7 @@ from gaitnet_mpc.gait import (
     SwingConfig,
     SwingTrajectory,
 )
-from gaitnet_mpc.mpc.srbm import NX, SRBMMPC, SRBMConfig
+from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, NX, SRBMMPC, SRBMConfig
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
 from gaitnet_mpc.terrain import Course
@@ -38,11 +65,29 @@ class SRBMWalkConfig:
 
     dt_s: float = 0.045  # MPC stage = 1/5 of a step (step 0.225 s)
     replan_period_s: float = 0.01
-    com_height_m: float | None = None  # default: the height at reset
+    com_height_m: float | None = None  # walking CoM height; default: reset height + offset
+    # Walk with bent knees: at the standing height (knee 0.7 rad) a leg reaching 0.12 m
+    # or more ahead at touchdown is nearly straight; the knee then locks at its limit,
+    # carries the load with no torque and vaults the CoM up, so the MPC loses control of
+    # the height and the swing leg cannot reach its foothold. 3 cm lower bends the knee
+    # to about 1.0 rad (knee torque for m g about 18 N m of the 67 N m available).
+    com_height_offset_m: float = -0.03
+    com_height_ramp_s: float = 0.5  # the height reference moves there over this time
     max_pos_error_m: float = 0.05  # clamp of the position-tracking error in the reference
+    path_max_error_m: float = 0.10  # anti-windup: the commanded path stays this close
     max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
     path_gain_per_s: float = 1.0  # CoM path error -> velocity added to the foothold command
+    max_path_feedback_mps: float = 0.2  # bound of that added velocity
     retarget_stop_fraction: float = 0.8  # footholds are frozen in the last 20 % of a swing
+    stance_half_width_m: float = 0.07  # lateral CoM-to-foot distance of the sway orbit
+    max_step_m: float = 0.35  # forward/backward foothold limit from the stance foot
+    early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
+    # Stance legs get tau = [g(q) - J^T lambda]_leg (control/stance.py with qdd = 0) rather
+    # than -J^T lambda alone: without the leg's own gravity torques the ground reaction
+    # exceeds the MPC's wrench by about 12 N (the weight of the lower leg pushing on the
+    # foot), so the CoM stood 1.5 cm above its reference while the MPC kept asking for less
+    # force. Set False if the low-level controller compensates stance-leg gravity itself.
+    stance_gravity_ff: bool = True
     mpc: SRBMConfig = field(default_factory=SRBMConfig)
     low_level: LowLevelConfig = field(default_factory=LowLevelConfig)
     swing: SwingConfig = field(
@@ -59,8 +104,32 @@ def centroidal_inertia_body(robot: RobotModel) -> np.ndarray:
     return np.array(data.Ig.inertia)
 
 
+def lip_gains(z0_m: float, step_s: float, half_width_m: float) -> tuple[float, float, float, float]:
+    """LIP foothold gains for CoM height ``z0_m`` and step (stance) time ``step_s``.
+
+    Returns ``(omega, k_v, lateral_offset, cmd_scale)``: the LIP frequency [1/s], the
+    Raibert velocity gain ``k_v = coth(omega T)/omega - T/2`` [s] (deadbeat: after one
+    stance of ``T`` on the new foot, a velocity error is cancelled), the heuristic's lateral
+    offset [m] whose fixed point is the symmetric sway orbit with the feet ``half_width_m``
+    beside the CoM (orbit touchdown speed ``V = omega d tanh(omega T / 2)``) and the factor
+    applied to the velocity command inside the heuristic [-] (see below).
+    """
+    omega = math.sqrt(GRAVITY_MPS2 / z0_m)
+    x = omega * step_s
+    k_v = 1.0 / (omega * math.tanh(x)) - 0.5 * step_s
+    t = math.tanh(0.5 * x)
+    # Walking at mean speed v on the LIP, the CoM is fastest at touchdown:
+    # v_td = v (x/2) coth(x/2). The heuristic's fixed point equals that orbit (foothold
+    # v T / 2 ahead of the CoM) when its velocity command is scaled by
+    # kappa + (kappa - 1) T / (2 k_v); with the plain command the gait settles about 10 %
+    # slower than commanded.
+    kappa = 0.5 * x / math.tanh(0.5 * x)
+    cmd_scale = kappa + (kappa - 1.0) * step_s / (2.0 * k_v)
+    return omega, k_v, half_width_m * (1.0 - t * t) / 2.0, cmd_scale
+
+
 class SRBMWalkController(Controller):
-    """SRBM MPC + gait schedule + Raibert footholds + low-level control."""
+    """SRBM MPC + gait schedule + LIP/Raibert footholds + low-level control."""
 
     name = "srbm"
 
@@ -76,7 +145,6 @@ class SRBMWalkController(Controller):
         self.command = command
         self.config = config or SRBMWalkConfig()
         c = self.config
-        planar = robot.spec.planar
         self.mpc = SRBMMPC(
             robot.total_mass_kg,
             centroidal_inertia_body(robot),
@@ -85,32 +153,45 @@ class SRBMWalkController(Controller):
             c.mpc,
         )
         self.low = LowLevelController(robot, c.low_level)
+        self._pin_data = robot.pin_model.createData()
         self.stance_map = StanceMap(robot)
-        lateral = 0.0 if planar else 0.065
-        self.raibert = RaibertHeuristic(
-            RaibertConfig(
-                hip_lateral_offset_m=lateral,
-                min_lateral_separation_m=0.0 if planar else 0.08,
-                max_lateral_separation_m=0.0 if planar else 0.30,
-            )
-        )
         self.schedule = GaitSchedule(GaitScheduleConfig(default_dt_s=c.dt_s))
         self._stats = MPCStats()
         self._steps: list[float] = []
 
     # --------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
+        c = self.config
+        planar = self.robot.spec.planar
         self.schedule.reset(state.t_s)
         self.mpc.reset()
         self.t0_s = state.t_s
+        self.t_prev_s = state.t_s
         self.com0 = state.com_world_m.copy()
+        self.path_xy = state.com_world_m[:2].copy()
         self.yaw0 = float(state.base_rpy_rad[2])
-        self.z_ref = self.config.com_height_m or float(state.com_world_m[2])
+        self.z_start = float(state.com_world_m[2])
+        self.z_walk = c.com_height_m or self.z_start + c.com_height_offset_m
         self.ground_z = float(min(p[2] for p in state.foot_pos_world_m.values()))
         self.ground_z -= self.robot.spec.foot_contact_radius_m
+        step_s = self.schedule.config.stages_per_step * c.dt_s
+        self.omega, k_v, lateral, self.cmd_scale = lip_gains(
+            self.z_walk - self.ground_z, step_s, c.stance_half_width_m
+        )
+        self.raibert = RaibertHeuristic(
+            RaibertConfig(
+                hip_lateral_offset_m=0.0 if planar else lateral,
+                velocity_gain_s=k_v,
+                max_step_m=c.max_step_m,
+                min_lateral_separation_m=0.0 if planar else 0.08,
+                max_lateral_separation_m=0.0 if planar else 0.30,
+            )
+        )
         self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
         self.foothold = dict(self.foot_pos)
         self.swing: SwingTrajectory | None = None
+        self.landed = False
+        self.step_seen = -1
         self.wrench: np.ndarray | None = None
         self.next_replan_s = -np.inf
 
@@ -126,7 +207,17 @@ class SRBMWalkController(Controller):
     def _ramp(self, t_s: float) -> float:
         """Fraction of the command applied ``t_s`` after the start (acceleration limit)."""
         v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
-        return min(1.0, t_s * self.config.max_accel_mps2 / v_max)
+        return min(1.0, max(t_s, 0.0) * self.config.max_accel_mps2 / v_max)
+
+    def _z_ref(self, t_s: float) -> float:
+        """CoM height reference at absolute time ``t_s`` (linear ramp from the start)."""
+        ramp_s = self.config.com_height_ramp_s
+        k = 1.0 if ramp_s <= 0.0 else min(1.0, max(t_s - self.t0_s, 0.0) / ramp_s)
+        return self.z_start + k * (self.z_walk - self.z_start)
+
+    def _heading_cmd(self, t_s: float) -> float:
+        """Commanded heading [rad] at time ``t_s``: initial yaw plus integrated yaw rate."""
+        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
 
     def _cmd_world(self, yaw: float, t_s: float) -> np.ndarray:
         """Commanded CoM velocity (3,) in the world at time ``t_s`` after the start."""
@@ -135,16 +226,17 @@ class SRBMWalkController(Controller):
         vx, vy = k * self.command.vx_mps, k * self.command.vy_mps
         return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
 
-    def _desired_com_xy(self, t_s: float) -> np.ndarray:
-        """Commanded CoM path (2,) at ``t_s`` after the start (ramped command integrated;
-        the heading is taken at ``t_s``, exact for straight walking)."""
-        v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
-        t_ramp = v_max / self.config.max_accel_mps2
-        travel_s = t_s * t_s / (2 * t_ramp) if t_s < t_ramp else t_s - t_ramp / 2
-        yaw = self._heading_cmd(self.t0_s + t_s)
-        c, s = np.cos(yaw), np.sin(yaw)
-        vx, vy = self.command.vx_mps, self.command.vy_mps
-        return self.com0[:2] + travel_s * np.array([c * vx - s * vy, s * vx + c * vy])
+    def _update_path(self, state: RobotState) -> None:
+        """Integrate the commanded path to ``state.t_s`` and apply the anti-windup clamp."""
+        dt = state.t_s - self.t_prev_s
+        self.t_prev_s = state.t_s
+        if dt > 0.0:
+            v = self._cmd_world(self._heading_cmd(state.t_s), state.t_s - self.t0_s)
+            self.path_xy += v[:2] * dt
+        err = self.path_xy - state.com_world_m[:2]
+        norm = float(np.linalg.norm(err))
+        if norm > self.config.path_max_error_m:
+            self.path_xy = state.com_world_m[:2] + err * (self.config.path_max_error_m / norm)
 
     def _x0(self, state: RobotState) -> np.ndarray:
         rpy = state.base_rpy_rad
@@ -156,18 +248,24 @@ class SRBMWalkController(Controller):
         """(h + 1, 13) references at the stage boundaries ``stage_times`` (from now)."""
         t_now = state.t_s - self.t0_s
         yaw_rate = self.command.yaw_rate_radps
-        yaw_now = self.yaw0 + yaw_rate * t_now
+        yaw_now = self._heading_cmd(state.t_s)
         x_ref = np.zeros((len(stage_times), NX))
-        # Desired CoM path integrated from the start, error clamped to avoid wind-up.
+        # Start from the commanded path, its error to the CoM clamped to avoid wind-up,
+        # then integrate the commanded velocity stage by stage (exact heading per stage).
+        err = self.path_xy - state.com_world_m[:2]
+        norm = float(np.linalg.norm(err))
         lim = self.config.max_pos_error_m
-        err = np.clip(self._desired_com_xy(t_now) - state.com_world_m[:2], -lim, lim)
-        base_xy = state.com_world_m[:2] + err
+        if norm > lim:
+            err *= lim / norm
+        p_xy = state.com_world_m[:2] + err
         for k, tk in enumerate(stage_times):
             yaw_k = yaw_now + yaw_rate * tk
             v_cmd = self._cmd_world(yaw_k, t_now + tk)
+            if k > 0:
+                p_xy = p_xy + v_cmd[:2] * (tk - stage_times[k - 1])
             x_ref[k, 2] = yaw_k
-            x_ref[k, 3:5] = base_xy + v_cmd[:2] * tk
-            x_ref[k, 5] = self.z_ref
+            x_ref[k, 3:5] = p_xy
+            x_ref[k, 5] = self._z_ref(state.t_s + tk)
             x_ref[k, 8] = yaw_rate
             x_ref[k, 9:12] = v_cmd
             x_ref[k, 12] = 1.0
@@ -175,26 +273,46 @@ class SRBMWalkController(Controller):
             x_ref[:, [0, 2, 4, 6, 8, 10]] = 0.0
         return x_ref
 
-    def _plan_foothold(self, state: RobotState, foot: str, t_touchdown_s: float) -> np.ndarray:
-        sched = self.schedule
-        yaw = float(state.base_rpy_rad[2])
-        stance = sched.stance_foot
-        # Steer the footholds back to the commanded path: a position error adds a bounded
-        # velocity to the command the heuristic sees (heading frame).
-        t_now = state.t_s - self.t0_s
-        ex, ey = self._desired_com_xy(t_now) - state.com_world_m[:2]
+    def _lip(
+        self, p_xy: np.ndarray, v_xy: np.ndarray, foot_xy: np.ndarray, t_s: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """CoM (position, velocity) in the plane after ``t_s`` on the LIP about ``foot_xy``."""
+        w = self.omega
+        ch, sh = math.cosh(w * t_s), math.sinh(w * t_s)
+        d = p_xy - foot_xy
+        return foot_xy + d * ch + v_xy * (sh / w), d * (w * sh) + v_xy * ch
+
+    def _path_feedback(self, state: RobotState, yaw: float) -> np.ndarray:
+        """Bounded velocity (heading frame) that steers the footholds back to the path."""
+        ex, ey = self.path_xy - state.com_world_m[:2]
         c, s_ = np.cos(yaw), np.sin(yaw)
         err_heading = np.array([c * ex + s_ * ey, -s_ * ex + c * ey])
-        v_fb = np.clip(self.config.path_gain_per_s * err_heading, -0.2, 0.2)
-        ramp = self._ramp(t_now)
+        lim = self.config.max_path_feedback_mps
+        return np.clip(self.config.path_gain_per_s * err_heading, -lim, lim)
+
+    def _foothold(
+        self,
+        state: RobotState,
+        foot: str,
+        p_td_xy: np.ndarray,
+        v_td_xy: np.ndarray,
+        p_stance: np.ndarray,
+        t_td_s: float,
+        stance_s: float,
+    ) -> np.ndarray:
+        """Foothold (3,) of ``foot`` touching down at absolute time ``t_td_s`` with the CoM at
+        (``p_td_xy``, ``v_td_xy``); the foot on ``p_stance`` stands until then."""
+        yaw = self._heading_cmd(t_td_s)
+        ramp = self._ramp(t_td_s - self.t0_s)
+        cmd = ramp * self.cmd_scale * np.array([self.command.vx_mps, self.command.vy_mps])
         p = self.raibert.foothold(
             foot,
-            p_com_world_m=state.com_world_m,
-            v_com_world_mps=state.com_vel_world_mps,
-            cmd_vel_mps=ramp * np.array([self.command.vx_mps, self.command.vy_mps]) + v_fb,
-            stance_duration_s=sched.current_step_duration_s,
-            time_to_touchdown_s=t_touchdown_s,
-            p_stance_foot_world_m=state.foot_pos_world_m[stance],
+            p_com_world_m=np.array([p_td_xy[0], p_td_xy[1], state.com_world_m[2]]),
+            v_com_world_mps=v_td_xy,
+            cmd_vel_mps=cmd + self._path_feedback(state, yaw),
+            stance_duration_s=stance_s,
+            time_to_touchdown_s=0.0,
+            p_stance_foot_world_m=p_stance,
             ground_z_m=self.ground_z,
             yaw_rad=yaw,
             cmd_yaw_rate_radps=self.command.yaw_rate_radps,
@@ -204,12 +322,32 @@ class SRBMWalkController(Controller):
             p[1] = state.foot_pos_world_m[foot][1]
         return p
 
+    def _stance_pos(self, state: RobotState, foot: str) -> np.ndarray:
+        """Where ``foot`` stands: measured while in contact, else the last stored position."""
+        if state.foot_contact[foot]:
+            self.foot_pos[foot] = state.foot_pos_world_m[foot].copy()
+        return self.foot_pos[foot]
+
+    def _plan_swing_foothold(self, state: RobotState, t_left_s: float) -> np.ndarray:
+        """Foothold of the current swing foot: Raibert at the LIP-predicted touchdown."""
+        sched = self.schedule
+        p_st = self._stance_pos(state, sched.stance_foot)
+        p_td, v_td = self._lip(
+            state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], t_left_s
+        )
+        next_dt = sched.next_step_dt_s or sched.current_step_dt_s
+        stance_s = sched.config.stages_per_step * next_dt
+        return self._foothold(
+            state, sched.swing_foot, p_td, v_td, p_st, state.t_s + t_left_s, stance_s
+        )
+
     def _on_step_start(self, state: RobotState) -> None:
         sched = self.schedule
         self._steps.append(sched.current_step_duration_s)
         swing_foot = sched.swing_foot
+        self.landed = False
         self.foot_pos[sched.stance_foot] = state.foot_pos_world_m[sched.stance_foot].copy()
-        target = self._plan_foothold(state, swing_foot, sched.current_step_duration_s)
+        target = self._plan_swing_foothold(state, sched.current_step_duration_s)
         self.foothold[swing_foot] = target
         obstacles = self.course.obstacles_between(
             min(state.foot_pos_world_m[swing_foot][0], target[0]),
@@ -224,28 +362,34 @@ class SRBMWalkController(Controller):
         self.next_replan_s = -np.inf
 
     def _update_foothold(self, state: RobotState) -> None:
-        """Re-plan the swing foot's foothold with the current CoM velocity (until the
-        last ``retarget_stop_fraction`` of the swing) and bend the swing path to it."""
+        """Re-plan the swing foot's foothold with the current CoM state (until the last
+        ``retarget_stop_fraction`` of the swing) and bend the swing path to it."""
         sched = self.schedule
-        if self.swing is None or sched.phase_in_step > self.config.retarget_stop_fraction:
+        if (
+            self.swing is None
+            or self.landed
+            or sched.phase_in_step > self.config.retarget_stop_fraction
+        ):
             return
-        foot = sched.swing_foot
-        target = self._plan_foothold(state, foot, sched.time_left_in_step_s)
+        target = self._plan_swing_foothold(state, sched.time_left_in_step_s)
         if self.swing.retarget(target, sched.time_in_step_s):
-            self.foothold[foot] = target
+            self.foothold[sched.swing_foot] = target
 
     def _torque_limits(
-        self, state: RobotState, foot_index: int, mask: np.ndarray
-    ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+        self, state: RobotState, feet: list[tuple[int, np.ndarray]]
+    ) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray]]:
         """Stance-leg torque limits for the MPC: ``|J_leg^T [f; m]| <= tau_max`` with the
-        current leg Jacobian, on the stages of the current step."""
+        current leg Jacobian, for each ``(foot_index, stage_mask)``."""
         q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
         self.stance_map.update(q, v)
-        foot = FEET[foot_index]
-        idx = self.robot.n_root_dofs + self.robot.leg_joint_index[foot]
-        j_t = self.stance_map.foot_jacobian(foot)[:, idx].T  # (n_leg, 6)
-        tau_max = self.robot.torque_limit_nm[self.robot.leg_joint_index[foot]]
-        return foot_index, mask, j_t, tau_max
+        out = []
+        for foot_index, mask in feet:
+            foot = FEET[foot_index]
+            idx = self.robot.n_root_dofs + self.robot.leg_joint_index[foot]
+            j_t = self.stance_map.foot_jacobian(foot)[:, idx].T  # (n_leg, 6)
+            tau_max = self.robot.torque_limit_nm[self.robot.leg_joint_index[foot]]
+            out.append((foot_index, mask, j_t, tau_max))
+        return out
 
     def _replan(self, state: RobotState) -> None:
         sched = self.schedule
@@ -254,28 +398,42 @@ class SRBMWalkController(Controller):
         dts[0] = max(hz.first_stage_remaining_s, 0.005)
         stage_times = np.concatenate([[0.0], np.cumsum(dts)])
         x_ref = self._reference(state, stage_times)
-        contact = np.asarray(hz.contact, dtype=bool)
+        contact = np.array(hz.contact, dtype=bool)
         steps = np.asarray(hz.step_index)
         h = len(dts)
         stance_now, swing_now = sched.stance_foot, sched.swing_foot
+        i_st, i_sw = FEET.index(stance_now), FEET.index(swing_now)
         t_left = sched.time_left_in_step_s
         next_dt = sched.next_step_dt_s or sched.current_step_dt_s
-        future = self._plan_foothold(state, stance_now, t_left + 5 * next_dt)
-        # Where each foot stands in each stage (swinging feet carry no wrench, eq. 23):
-        # the stance foot stays put in step 0 and lands at `future` in step 2; the swing
-        # foot stands on its planned foothold in step 1.
+        t_next = sched.config.stages_per_step * next_dt
+        p_st = self._stance_pos(state, stance_now)
+        if self.landed:  # the swing foot stands where it touched down
+            p_sw = self._stance_pos(state, swing_now)
+            contact[steps == 0, i_sw] = True
+        else:
+            p_sw = self.foothold[swing_now]
+        # The stance foot lands again (step 2) where the heuristic puts it for the CoM
+        # state predicted by the LIP over the rest of this step and the next one.
+        p_td, v_td = self._lip(state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], t_left)
+        p_td2, v_td2 = self._lip(p_td, v_td, p_sw[:2], t_next)
+        future = self._foothold(
+            state, stance_now, p_td2, v_td2, p_sw, state.t_s + t_left + t_next, t_next
+        )
+        # Where each foot stands in each stage (swinging feet carry no wrench, eq. 23).
         feet_pos = np.zeros((h, 2, 3))
-        i_st, i_sw = FEET.index(stance_now), FEET.index(swing_now)
-        feet_pos[:, i_st] = np.where((steps >= 2)[:, None], future, self.foot_pos[stance_now])
-        feet_pos[:, i_sw] = self.foothold[swing_now]
+        feet_pos[:, i_st] = np.where((steps >= 2)[:, None], future, p_st)
+        feet_pos[:, i_sw] = p_sw
         if self.robot.spec.planar:
             feet_pos[:, :, 1] = state.com_world_m[1]
-        # Stance feet keep their measured heading; a foot that lands later takes the
+        # Standing feet keep their measured heading; a foot that lands later takes the
         # commanded heading its swing is steered to.
         yaw = np.full((h, 2), self._heading_cmd(state.t_s))
         yaw[steps == 0, i_st] = state.foot_yaw_rad[stance_now]
+        if self.landed:
+            yaw[steps <= 1, i_sw] = state.foot_yaw_rad[swing_now]
         t0 = time.perf_counter()
-        limits = self._torque_limits(state, i_st, steps == 0)
+        feet = [(i_st, steps == 0)] + ([(i_sw, steps == 0)] if self.landed else [])
+        limits = self._torque_limits(state, feet)
         try:
             plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw, limits)
         except QPSolveError:
@@ -288,22 +446,42 @@ class SRBMWalkController(Controller):
     def compute(self, state: RobotState) -> np.ndarray:
         sched = self.schedule
         sched.advance_to(state.t_s)
-        if sched.at_step_start and (self.swing is None or sched.time_in_step_s < 1e-3):
-            if sched.step_index > 0 or self.swing is None:
-                self._on_step_start(state)
+        if sched.step_index != self.step_seen:
+            self.step_seen = sched.step_index
+            self._on_step_start(state)
+        self._update_path(state)
+        swing = sched.swing_foot
+        if (
+            not self.landed
+            and sched.phase_in_step >= self.config.early_touchdown_phase
+            and state.foot_contact[swing]
+        ):
+            # Early touchdown: stance from now on (double support for the rest of the step).
+            self.landed = True
+            self.next_replan_s = -np.inf
         if state.t_s >= self.next_replan_s:
             self._update_foothold(state)
             self._replan(state)
             self.next_replan_s = state.t_s + self.config.replan_period_s
-        stance, swing = sched.stance_foot, sched.swing_foot
+        stance = sched.stance_foot
         wrench = {}
         if self.wrench is not None:
             wrench[stance] = self.wrench[FEET.index(stance)]
-        t_swing = sched.time_in_step_s
-        target = {swing: (self.swing.position(t_swing), self.swing.velocity(t_swing))}
+            if self.landed:
+                wrench[swing] = self.wrench[FEET.index(swing)]
+        target = {}
+        if not self.landed:
+            t_swing = sched.time_in_step_s
+            target[swing] = (self.swing.position(t_swing), self.swing.velocity(t_swing))
         yaw = None if self.robot.spec.planar else self._heading_cmd(state.t_s)
-        return self.low.torques(state, wrench, target, yaw)
-
-    def _heading_cmd(self, t_s: float) -> float:
-        """Commanded heading [rad] at time ``t_s``: initial yaw plus integrated yaw rate."""
-        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
+        tau = self.low.torques(state, wrench, target, yaw)
+        if self.config.stance_gravity_ff and wrench:
+            r = self.robot
+            q, _ = r.mj_to_pin(state.qpos, state.qvel)
+            g = pin.computeGeneralizedGravity(r.pin_model, self._pin_data, q)[r.n_root_dofs :]
+            for foot in wrench:
+                idx = r.leg_joint_index[foot]
+                tau[idx] = np.clip(
+                    tau[idx] + g[idx], -r.torque_limit_nm[idx], r.torque_limit_nm[idx]
+                )
+        return tau

@@ -50,3 +50,24 @@ __all__ = [
     "trunk_yaw_rad",
     "whole_body_ik",
 ]
+
+# Reference trajectories f_ref / f_IK (Algorithm 1 lines 2-3 and 9).
+from gaitnet_mpc.kinematics.reference import (
+    CentroidalReference,
+    ReferenceConfig,
+    ReferenceTiming,
+    ReferenceWorkspace,
+    make_reference,
+    swing_profile,
+    update_reference,
+)
+
+__all__ += [
+    "CentroidalReference",
+    "ReferenceConfig",
+    "ReferenceTiming",
+    "ReferenceWorkspace",
+    "make_reference",
+    "swing_profile",
+    "update_reference",
+]

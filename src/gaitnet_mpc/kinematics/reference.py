@@ -29,13 +29,16 @@ Stage boundary ``k`` lies at ``t_k = sum(dts_s[:k])`` seconds from now (``t_0 = 
   lift-off point), ``F_1, F_2, ...`` the planned touchdown targets. The swing path is the
   obstacle-free :class:`gaitnet_mpc.gait.SwingTrajectory` (minimum-jerk quintic in x-y, apex
   ``max(z_0, z_1) + swing_apex_height_m`` at mid-swing, zero touchdown speed), evaluated in
-  closed form and vectorised (bit-for-bit the same curve, about 100x cheaper than building
-  the objects; see the tests). The current swing runs over the whole current step, from
-  ``-time_in_step_s`` to its touchdown; later swings over their step (``h' dt``).
+  closed form and vectorised by :func:`swing_profile` (the same curve to 1e-12 m, see the
+  tests; building one ``SwingTrajectory`` object alone costs ~0.5 ms). The current swing
+  runs over the whole current step, from ``-time_in_step_s`` to its touchdown; later
+  swings over their step (``h' dt``). Missing targets fall back to a neutral point
+  (:func:`make_reference`).
   Foot headings: a standing foot keeps its heading, a new foothold gets the trunk heading
   at touchdown, a swinging foot blends the two with the same minimum-jerk phase.
 * Legs: analytic IK (:func:`gaitnet_mpc.kinematics.whole_body_ik`, Appendix B); arms at
-  the nominal pose.
+  the nominal pose. An out-of-reach target keeps its value in ``p_foot_ref``, the IK
+  returns the nearest feasible leg pose and ``reachable`` is False at that stage.
 
 CoM placement (both functions): the trunk position of stage ``k`` is found by the fixed
 point ``p_B <- p_B + G^-1 (p_c^des - c(q(p_B)))`` where ``c(q)`` is the CoM of the IK
@@ -51,7 +54,8 @@ Velocities, momenta and the centroidal pose
 -------------------------------------------
 
 ``v_ref`` is the derivative of the configuration path along the stage times by
-second-order finite differences on the (non-uniform) grid ``t_k`` (``numpy.gradient``):
+second-order finite differences on the (non-uniform) grid ``t_k`` (three-point, one-sided
+at the ends, as ``numpy.gradient(edge_order=2)``; :attr:`ReferenceTiming.derivative_matrix`):
 joint rates directly, the trunk's linear velocity as ``R^T dp_B/dt`` and its angular
 velocity as ``R^T e_z dpsi/dt`` (Pinocchio's local free-flyer velocity; the biped's root
 is Euclidean, ``v = dq/dt``). Then ``h_ref[k] = A_G(q_ref[k]) v_ref[k]`` (eq. 11,
@@ -86,7 +90,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal, Protocol
 
@@ -217,6 +221,12 @@ class ReferenceTiming:
         """Number of stages ``h``."""
         return int(self.dts_s.size)
 
+    @property
+    def stage_lengths_s(self) -> np.ndarray:
+        """(h,) full stage lengths [s]: ``full_dts_s`` (never None after construction)."""
+        assert self.full_dts_s is not None
+        return self.full_dts_s
+
     @cached_property
     def times_s(self) -> np.ndarray:
         """(h+1,) stage boundary times from now [s], ``t_0 = 0`` (read-only)."""
@@ -240,11 +250,22 @@ class ReferenceTiming:
         whose full length is scaled with it.
         """
         dts = np.array(dts_s, dtype=float).reshape(-1)
-        if dts.shape != self.dts_s.shape:
-            raise ConfigError("dts_s", dts_s, f"({self.horizon},) stage durations [s]")
+        if dts.shape != self.dts_s.shape or not (np.all(np.isfinite(dts)) and dts.min() > 0.0):
+            raise ConfigError("dts_s", dts_s, f"({self.horizon},) finite durations > 0 s")
         full = dts.copy()
-        full[0] = dts[0] * float(self.full_dts_s[0] / self.dts_s[0])  # type: ignore[index]
-        return replace(self, dts_s=dts, full_dts_s=full)
+        full[0] = dts[0] * float(self.stage_lengths_s[0] / self.dts_s[0])
+        dts.flags.writeable = full.flags.writeable = False
+        # the other fields were validated already: skip __post_init__ (runs in the f_IK loop)
+        new = object.__new__(ReferenceTiming)
+        for name, value in (
+            ("dts_s", dts),
+            ("contact", self.contact),
+            ("time_in_step_s", self.time_in_step_s),
+            ("stages_per_step", self.stages_per_step),
+            ("full_dts_s", full),
+        ):
+            object.__setattr__(new, name, value)
+        return new
 
     @classmethod
     def from_horizon(
@@ -319,9 +340,10 @@ class ReferenceWorkspace:
     """Per-robot constants and scratch data shared by every reference call.
 
     Holds the Pinocchio data, the leg geometries, the total mass, the nominal CoM height,
-    the nominal trunk-to-CoM offset, the nominal lateral foot offsets and the CoM gain
-    ``G = diag(d c / d p_B)`` (feet fixed) of the fixed-point CoM placement. Not
-    thread-safe (the Pinocchio data is scratch space); create one per controller.
+    the nominal trunk-to-CoM offset, the nominal lateral foot offsets and the CoM gains
+    ``G = diag(d c / d p_B)`` (feet fixed) and ``diag(d c / d p_f)`` (trunk fixed) of the
+    fixed-point CoM placement. Not thread-safe (the Pinocchio data is scratch space);
+    create one per controller. Building it costs a few milliseconds.
 
     Args:
         robot: ``humanoid3d`` or ``biped2d``.
@@ -479,7 +501,9 @@ def swing_profile(
     x-y: ``p0 + (p1 - p0) sigma(s)``; z: rise from ``z0`` to the apex
     ``max(z0, z1) + apex_height_m`` over ``s`` in [0, 1/2] and descent to ``z1`` over
     [1/2, 1], each ``sigma``-shaped (zero touchdown speed), ``sigma`` the minimum-jerk
-    blend. ``s = 0`` is ``p0`` and ``s = 1`` is ``p1`` exactly.
+    blend. ``s = 0`` gives ``p0`` exactly and ``s = 1`` gives ``p1`` up to rounding (the
+    reference stores a landed foot as ``s = 0`` on its new foothold, so stance positions
+    are exact).
 
     Args:
         p0_m: (N, 3) lift-off points [m].
@@ -578,39 +602,57 @@ class _FootTimeline:
     swings: tuple[_Swing, ...]
 
 
+@dataclass(frozen=True)
+class _FootPlan:
+    """Foot targets over the horizon and the foothold data behind them."""
+
+    p_foot_m: np.ndarray  # (h+1, 2, 3) foot-centre targets
+    foot_yaw_rad: np.ndarray  # (h+1, 2) foot headings
+    footholds_m: dict[str, np.ndarray]  # foot -> (n_f, 3)
+    foothold_yaw_rad: dict[str, np.ndarray]  # foot -> (n_f,)
+    index: np.ndarray  # (h+1, 2) int foothold F_j
+    phase: np.ndarray  # (h+1, 2) swing phase from F_j to F_{j+1}
+    time_in_swing_s: np.ndarray  # (2,)
+
+
 def _foot_timeline(
     timing: ReferenceTiming, foot_col: int, times_s: np.ndarray, time_in_swing_s: float
 ) -> _FootTimeline:
     """Split one contact column into stance / swing segments (see module docstring).
 
-    ``time_in_swing_s``: how long ago a foot swinging in stage 0 lifted off [s].
+    ``time_in_swing_s``: how long ago a foot swinging in stage 0 lifted off [s]. Plain
+    Python over the ``h + 1`` boundaries: cheaper than NumPy at these sizes.
     """
-    c = timing.contact[:, foot_col]  # (h,)
-    h = c.size
-    change = np.flatnonzero(c[1:] != c[:-1]) + 1
-    starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [h]])
-    index = np.zeros(h + 1, dtype=np.int64)
-    phase = np.zeros(h + 1)
+    c = timing.contact[:, foot_col].tolist()  # (h,)
+    t = times_s.tolist()  # (h+1,)
+    h = len(c)
+    index = [0] * (h + 1)
+    phase = [0.0] * (h + 1)
     swings: list[_Swing] = []
     j = 0
-    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
-        if c[a]:  # stance on F_j over boundaries a..b
-            index[a : b + 1] = j
-            phase[a : b + 1] = 0.0
-            continue
-        t_lo = -time_in_swing_s if a == 0 else float(times_s[a])
-        if b < h:
-            t_td = float(times_s[b])
-        else:
-            full = timing.full_dts_s[a]  # type: ignore[index]
-            t_td = max(t_lo + timing.stages_per_step * float(full), float(times_s[h]))
-        duration = max(t_td - t_lo, 1e-12)
-        index[a : b + 1] = j
-        phase[a : b + 1] = np.clip((times_s[a : b + 1] - t_lo) / duration, 0.0, 1.0)
-        swings.append(_Swing(a, t_lo, t_td))
-        j += 1
-    return _FootTimeline(index, phase, tuple(swings))
+    a = 0
+    while a < h:
+        b = a + 1
+        while b < h and c[b] == c[a]:
+            b += 1  # stages a..b-1 form one segment, boundaries a..b
+        if c[a]:  # stance on F_j (also at the touchdown boundary a)
+            index[a : b + 1] = [j] * (b + 1 - a)
+            phase[a : b + 1] = [0.0] * (b + 1 - a)
+        else:  # swing from F_j to F_{j+1}
+            t_lo = -time_in_swing_s if a == 0 else t[a]
+            if b < h:
+                t_td = t[b]
+            else:  # lands after the horizon: the swing lasts one step (h' dt)
+                t_step = timing.stages_per_step * float(timing.stage_lengths_s[a])
+                t_td = max(t_lo + t_step, t[h])
+            duration = max(t_td - t_lo, 1e-12)
+            for k in range(a, b + 1):
+                index[k] = j
+                phase[k] = min(max((t[k] - t_lo) / duration, 0.0), 1.0)
+            swings.append(_Swing(a, t_lo, t_td))
+            j += 1
+        a = b
+    return _FootTimeline(np.array(index), np.array(phase), tuple(swings))
 
 
 def _stacked_index(
@@ -626,48 +668,50 @@ def _stacked_index(
     return stacked, j0, j1
 
 
-def _foot_paths(
+def _foot_plan(
     ws: ReferenceWorkspace,
     index: np.ndarray,
     phase: np.ndarray,
     footholds: dict[str, np.ndarray],
     foothold_yaw: dict[str, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
-    """(h+1, 2, 3) foot positions and (h+1, 2) headings from the timeline (both feet in
+    time_in_swing_s: np.ndarray,
+) -> _FootPlan:
+    """Foot positions (h+1, 2, 3) and headings (h+1, 2) from the timeline (both feet in
     one vectorised :func:`swing_profile` call)."""
     stacked, j0, j1 = _stacked_index(index, footholds)  # (n_fh, 3), (h+1, 2) x2
     n = index.shape[0]
     apex = ws.config.swing_apex_height_m
     p_foot = swing_profile(stacked[j0.ravel()], stacked[j1.ravel()], phase.ravel(), apex)
     if ws.planar:
-        return p_foot.reshape(n, _N_FEET, 3), np.zeros((n, _N_FEET))
-    yaws = np.concatenate([foothold_yaw[f] for f in FEET])
-    y0 = yaws[j0]
-    yaw = y0 + _wrap(yaws[j1] - y0) * _min_jerk(phase)
-    return p_foot.reshape(n, _N_FEET, 3), yaw
+        yaw = np.zeros((n, _N_FEET))
+    else:
+        yaws = np.concatenate([foothold_yaw[f] for f in FEET])
+        y0 = yaws[j0]
+        yaw = y0 + _wrap(yaws[j1] - y0) * _min_jerk(phase)
+    return _FootPlan(
+        p_foot.reshape(n, _N_FEET, 3), yaw, footholds, foothold_yaw, index, phase, time_in_swing_s
+    )
 
 
 # -------------------------------------------------------------------- core solve
-def _solve(
+def _place_trunk(
     ws: ReferenceWorkspace,
-    timing: ReferenceTiming,
-    p_foot_m: np.ndarray,
-    foot_yaw_rad: np.ndarray,
+    plan: _FootPlan,
     p_com_target_m: np.ndarray,
     p_base_guess_m: np.ndarray,
     yaw_rad: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Trunk placement by the CoM fixed point + whole-body IK.
+    """Trunk placement by the CoM fixed point + whole-body IK (module docstring).
 
     Returns:
         q (h+1, nq), p_base (h+1, 3), rot (h+1, 3, 3), reachable (h+1,).
     """
     cfg = ws.config
     rot = _rotations(yaw_rad, cfg.trunk_pitch_rad)  # (h+1, 3, 3)
-    targets = {f: p_foot_m[:, i] for i, f in enumerate(FEET)}
-    yaw_targets = None
-    if not ws.planar and np.max(np.abs(_wrap(foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
-        yaw_targets = {f: foot_yaw_rad[:, i] for i, f in enumerate(FEET)}  # else q0 = 0
+    targets = {f: plan.p_foot_m[:, i] for i, f in enumerate(FEET)}
+    yaw_targets = None  # None: q0 = 0 (eq. 31), the same when the feet face the trunk heading
+    if not ws.planar and np.max(np.abs(_wrap(plan.foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
+        yaw_targets = {f: plan.foot_yaw_rad[:, i] for i, f in enumerate(FEET)}
     p_base = p_base_guess_m.copy()
     for it in range(cfg.com_iterations + 1):
         sol = whole_body_ik(
@@ -683,32 +727,25 @@ def _solve(
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def _finish(
+def _build(
     ws: ReferenceWorkspace,
     timing: ReferenceTiming,
-    q: np.ndarray,
-    p_base: np.ndarray,
-    rot: np.ndarray,
+    plan: _FootPlan,
+    p_com_target_m: np.ndarray,
+    p_base_guess_m: np.ndarray,
     yaw_rad: np.ndarray,
-    reachable: np.ndarray,
-    p_foot: np.ndarray,
-    foot_yaw: np.ndarray,
-    footholds: dict[str, np.ndarray],
-    foothold_yaw: dict[str, np.ndarray],
-    index: np.ndarray,
-    phase: np.ndarray,
-    time_in_swing_s: np.ndarray,
     yaw_rate_radps: float,
-    pose0_angular: np.ndarray,
+    pose0_angular_kgm2: np.ndarray,
 ) -> CentroidalReference:
-    """v_ref by finite differences, h_ref (eq. 11), p_com_ref, H_ref (eq. 12 / 30)."""
+    """IK trajectory, then v_ref by finite differences, h_ref (eq. 11), p_com_ref and
+    H_ref (eq. 12 / 30); shared by f_ref and f_IK."""
+    q, p_base, rot, reachable = _place_trunk(ws, plan, p_com_target_m, p_base_guess_m, yaw_rad)
     model, data = ws.model, ws.data
     times = timing.times_s  # (h+1,)
     n = times.size
-    root = ws.robot.n_root_q
     d_mat = timing.derivative_matrix  # (h+1, h+1)
     v = np.empty((n, model.nv))
-    v[:, ws.robot.n_root_dofs :] = d_mat @ q[:, root:]
+    v[:, ws.robot.n_root_dofs :] = d_mat @ q[:, ws.robot.n_root_q :]
     if ws.planar:  # Euclidean root: v = dq/dt
         v[:, :3] = d_mat @ q[:, :3]
     else:  # local free-flyer velocity: R^T dp/dt, R^T e_z dpsi/dt
@@ -718,42 +755,39 @@ def _finish(
         v[:, 3:6] = rot[:, 2, :] * yaw_dot[:, None]  # R^T e_z = third row of R
     h_ref = np.empty((n, 6))
     p_com = np.empty((n, 3))
-    for k in range(n):
-        hg = pin.computeCentroidalMomentum(model, data, q[k], v[k])
-        h_ref[k, :3], h_ref[k, 3:] = hg.linear, hg.angular
+    for k in range(n):  # eq. 11, h = A_G(q) v; the same pass computes the CoM
+        h_ref[k] = pin.computeCentroidalMomentum(model, data, q[k], v[k]).vector
         p_com[k] = data.com[0]
-    dts = timing.dts_s
-    pose0 = np.concatenate([ws.mass_kg * p_com[0], pose0_angular])
+    dts = np.append(timing.dts_s, 0.0)  # (h+1,), the last entry is unused
+    pose0 = np.concatenate([ws.mass_kg * p_com[0], pose0_angular_kgm2])
     if ws.config.pose_method == "eq30":
-        h_pose = centroidal_pose_eq30(
-            model, q, v, np.append(dts, 0.0), data=data, subtract_initial=True
-        )
+        h_pose = centroidal_pose_eq30(model, q, v, dts, data=data, subtract_initial=True)
         h_pose = h_pose - h_pose[0] + pose0
     else:
-        h_pose = centroidal_pose_riemann(h_ref, np.append(dts, 0.0), pose0)
+        h_pose = centroidal_pose_riemann(h_ref, dts, pose0)
         h_pose[:, :3] = ws.mass_kg * p_com  # exact primitive of the linear momentum
     return CentroidalReference(
         q_ref=q,
         v_ref=v,
         h_ref=h_ref,
         H_ref=h_pose,
-        p_foot_ref=p_foot,
+        p_foot_ref=plan.p_foot_m,
         p_com_ref=p_com,
         reachable=np.asarray(reachable, dtype=bool),
-        dts_s=np.array(dts),
+        dts_s=np.array(timing.dts_s),
         times_s=times,
         p_base_ref=p_base,
         rot_base_ref=rot,
         yaw_ref_rad=yaw_rad,
-        foot_yaw_ref_rad=foot_yaw,
-        footholds_m=footholds,
-        foothold_yaw_rad=foothold_yaw,
-        foothold_index=index,
-        swing_phase=phase,
+        foot_yaw_ref_rad=plan.foot_yaw_rad,
+        footholds_m=plan.footholds_m,
+        foothold_yaw_rad=plan.foothold_yaw_rad,
+        foothold_index=plan.index,
+        swing_phase=plan.phase,
         timing=timing,
-        time_in_swing_s=time_in_swing_s,
+        time_in_swing_s=plan.time_in_swing_s,
         yaw_rate_radps=yaw_rate_radps,
-        pose0_angular_kgm2=pose0_angular,
+        pose0_angular_kgm2=pose0_angular_kgm2,
         workspace=ws,
     )
 
@@ -954,41 +988,23 @@ def make_reference(
             if s_i < given.shape[0]:
                 pts.append(given[s_i].copy())
             else:
-                t_step = timing.stages_per_step * float(timing.full_dts_s[sw.first_stage])  # type: ignore[index]
+                t_step = timing.stages_per_step * float(timing.stage_lengths_s[sw.first_stage])
                 pts.append(
                     _neutral_foothold(ws, f, start, v_cmd, yaw0, yaw_rate, sw, t_step, pts[-1])
                 )
             yaws.append(yaw_td)
         fh_all[f] = np.array(pts)
         fh_yaw[f] = np.unwrap(np.array(yaws))
-    p_foot, foot_yaw = _foot_paths(ws, index, phase, fh_all, fh_yaw)
+    plan = _foot_plan(ws, index, phase, fh_all, fh_yaw, time_in_swing)
 
     rot = _rotations(yaw, ws.config.trunk_pitch_rad)
     p_base0 = p_com_des - rot @ ws.com_offset_trunk_m  # nominal trunk-to-CoM offset
-    q, p_base, rot, ok = _solve(ws, timing, p_foot, foot_yaw, p_com_des, p_base0, yaw)
     pose0 = (
         np.zeros(3)
         if pose0_angular_kgm2 is None
         else np.asarray(pose0_angular_kgm2, dtype=float).reshape(3).copy()
     )
-    return _finish(
-        ws,
-        timing,
-        q,
-        p_base,
-        rot,
-        yaw,
-        ok,
-        p_foot,
-        foot_yaw,
-        fh_all,
-        fh_yaw,
-        index,
-        phase,
-        time_in_swing,
-        yaw_rate,
-        pose0,
-    )
+    return _build(ws, timing, plan, p_com_des, p_base0, yaw, yaw_rate, pose0)
 
 
 # -------------------------------------------------------------------------------- f_IK
@@ -1106,7 +1122,7 @@ def update_reference(
             for s_i, sw in enumerate(line.swings):
                 yaws[s_i + 1] = yaw[0] + ref.yaw_rate_radps * sw.t_touchdown_s
             fh_yaw[f] = yaws
-    p_foot, foot_yaw = _foot_paths(ws, index, phase, footholds, fh_yaw)
+    plan = _foot_plan(ws, index, phase, footholds, fh_yaw, ref.time_in_swing_s)
 
     # CoM target and the initial trunk guess from the previous trunk-to-CoM offsets
     if p_com_iter_m is None:
@@ -1119,28 +1135,9 @@ def update_reference(
             p_com_target[:, 1] = ref.p_com_ref[:, 1]
     # previous trunk-to-CoM offset, corrected to first order for the leg folding and for
     # the CoM shift that the foot moves cause
-    d_com = (
-        p_com_target
-        - ref.p_com_ref
-        - np.einsum("fi,kfi->ki", ws.com_gain_feet, p_foot - ref.p_foot_ref)
-    )
+    d_com = p_com_target - ref.p_com_ref
+    d_com -= np.einsum("fi,kfi->ki", ws.com_gain_feet, plan.p_foot_m - ref.p_foot_ref)
     p_base0 = ref.p_base_ref + d_com / ws.com_gain
-    q, p_base, rot, ok = _solve(ws, timing, p_foot, foot_yaw, p_com_target, p_base0, yaw)
-    return _finish(
-        ws,
-        timing,
-        q,
-        p_base,
-        rot,
-        yaw,
-        ok,
-        p_foot,
-        foot_yaw,
-        footholds,
-        fh_yaw,
-        index,
-        phase,
-        ref.time_in_swing_s,
-        ref.yaw_rate_radps,
-        ref.pose0_angular_kgm2,
+    return _build(
+        ws, timing, plan, p_com_target, p_base0, yaw, ref.yaw_rate_radps, ref.pose0_angular_kgm2
     )

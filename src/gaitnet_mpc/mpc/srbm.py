@@ -31,6 +31,9 @@ NU_FOOT = 6
 NU = 2 * NU_FOOT
 GRAVITY_MPS2 = 9.81
 
+#: ``(foot_index, stage_mask (h,), J_T (n_leg, 6), tau_max (n_leg,))``, see SRBMMPC.build.
+TorqueLimits = tuple[int, np.ndarray, np.ndarray, np.ndarray]
+
 
 def skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrix: ``skew(a) @ b == np.cross(a, b)``."""
@@ -48,6 +51,11 @@ class SRBMConfig:
     w_vel: tuple[float, float, float] = (20.0, 20.0, 10.0)
     w_force: float = 1e-4  # paper Table VIII, L^f
     w_moment: float = 1e-3  # paper Table VIII, L^tau
+    # Regularise the wrench about the gravity-compensating one (m g shared by the stance
+    # feet of a stage) instead of about zero. Penalising |f|^2 itself pulls the planned
+    # vertical force below m g, which the receding horizon turns into a steady sag of the
+    # CoM (about 3 cm with the weights above) and a matching lean.
+    regularize_about_weight: bool = True
     contact: ContactParams = field(default_factory=ContactParams)
     qp_backend: str = "daqp"
 
@@ -82,6 +90,7 @@ class SRBMMPC:
         self.toe_m, self.heel_m = toe_m, heel_m
         self.workspace = make_workspace(self.config.qp_backend)
         self._last_u: np.ndarray | None = None
+        self._block_cache: dict[tuple[float, bool], tuple] = {}
         c = self.config
         diag = np.concatenate([c.w_rpy, c.w_pos_m, c.w_omega, c.w_vel, [0.0]])
         self._q_diag = np.tile(diag, c.horizon)
@@ -138,6 +147,43 @@ class SRBMMPC:
         return sx, su
 
     # ---------------------------------------------------------------- solve
+    def _foot_block(
+        self, yaw_rad: float, in_stance: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Reduced wrench variables of one foot in one stage.
+
+        Returns ``(E, C, l, u)``: the wrench is ``[f; m] = E z`` with ``z`` the reduced
+        variables (``E`` (6, n_z) with orthonormal columns) and the contact constraints
+        ``l <= C z <= u``.  A swinging foot has no variables at all (eq. 23 with sigma = 0
+        forces its wrench to zero, so carrying six variables pinned to zero only enlarges
+        the QP); a line foot cannot carry a moment about its long axis, so its moment is
+        spanned by the foot's lateral axis and the vertical (5 variables); a point foot
+        carries forces only (3 variables).
+        """
+        key = (round(float(yaw_rad), 9), bool(in_stance))
+        cached = self._block_cache.get(key)
+        if cached is not None:
+            return cached
+        if not in_stance:
+            out = (np.zeros((NU_FOOT, 0)), np.zeros((0, 0)), np.zeros(0), np.zeros(0))
+        else:
+            c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+            cols = [np.eye(NU_FOOT)[:, j] for j in range(3)]
+            if self.toe_m != 0.0 or self.heel_m != 0.0:
+                cols.append(np.array([0.0, 0.0, 0.0, -s, c, 0.0]))  # moment about lateral
+                cols.append(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0]))  # yaw moment
+            e = np.stack(cols, axis=1)
+            cm, lo, hi = foot_wrench_constraints(
+                float(yaw_rad), self.config.contact, self.toe_m, self.heel_m, in_stance=True
+            )
+            cz = cm @ e
+            keep = np.any(np.abs(cz) > 1e-12, axis=1)  # drop rows the basis satisfies
+            out = (e, cz[keep], lo[keep], hi[keep])
+        if len(self._block_cache) > 64:
+            self._block_cache.clear()
+        self._block_cache[key] = out
+        return out
+
     def build(
         self,
         x0: np.ndarray,
@@ -146,9 +192,9 @@ class SRBMMPC:
         contact: np.ndarray,
         feet_pos_m: np.ndarray,
         feet_yaw_rad: np.ndarray,
-        torque_limits: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None,
-    ) -> tuple[QPProblem, np.ndarray, np.ndarray]:
-        """The condensed QP over U (h*12,); also returns (Sx x0, Su) for predictions.
+        torque_limits: TorqueLimits | list[TorqueLimits] | None = None,
+    ) -> tuple[QPProblem, np.ndarray, np.ndarray, np.ndarray]:
+        """The condensed QP over the reduced wrench variables Z; U = T Z (h*12,).
 
         Args:
             x0: (13,) measured state.
@@ -159,49 +205,77 @@ class SRBMMPC:
                 swing: ignored).
             feet_yaw_rad: (h, 2) foot heading per stage.
             torque_limits: optional ``(foot_index, stage_mask (h,), J_T (n_leg, 6),
-                tau_max (n_leg,))``: joint-torque limits ``|J_T [f; m]| <= tau_max`` of
-                the stance leg (``tau = -J_c^T [f; m]``), on the stages of ``stage_mask``.
+                tau_max (n_leg,))``, or a list of them (one per stance leg): joint-torque
+                limits ``|J_T [f; m]| <= tau_max`` of a stance leg (``tau = -J_c^T [f; m]``),
+                on the stages of ``stage_mask`` where that foot stands.
+
+        Returns:
+            ``(problem, Sx x0, Su, T)``: the QP in Z, the free response (h*13,), the full
+            input-to-state map (h*13, h*12) and the basis T (h*12, n_z) with U = T Z.
         """
         h = self.config.horizon
         sx, su = self.condense(x0, x_ref[:h], dts_s, feet_pos_m)
         free = sx @ x0
         err0 = free - x_ref[1 : h + 1].reshape(-1)
-        q_su = su * self._q_diag[:, None]
-        hess = su.T @ q_su + np.diag(self._r_diag)
-        grad = q_su.T @ err0
-        rows, lo, hi = [], [], []
+        blocks = []
+        n_z = 0
         for k in range(h):
             for i in range(2):
-                cm, l_, u_ = foot_wrench_constraints(
-                    float(feet_yaw_rad[k, i]),
-                    self.config.contact,
-                    self.toe_m,
-                    self.heel_m,
-                    in_stance=bool(contact[k, i]),
-                )
-                row = np.zeros((cm.shape[0], h * NU))
-                col = NU * k + NU_FOOT * i
-                row[:, col : col + NU_FOOT] = cm
-                rows.append(row)
-                lo.append(l_)
-                hi.append(u_)
-        if torque_limits is not None:
-            i, mask, j_t, tau_max = torque_limits
+                blk = self._foot_block(float(feet_yaw_rad[k, i]), bool(contact[k, i]))
+                blocks.append((k, i, n_z, blk))
+                n_z += blk[0].shape[1]
+        basis = np.zeros((h * NU, n_z))
+        su_z = np.empty((h * NX, n_z))  # Su T, built block by block (T is block-diagonal)
+        for k, i, z0, (e, _, _, _) in blocks:
+            col = NU * k + NU_FOOT * i
+            basis[col : col + NU_FOOT, z0 : z0 + e.shape[1]] = e
+            su_z[:, z0 : z0 + e.shape[1]] = su[:, col : col + NU_FOOT] @ e
+        q_su = su_z * self._q_diag[:, None]
+        # einsum instead of BLAS: on a loaded machine a multi-threaded BLAS call on these
+        # small matrices can stall for tens of milliseconds.
+        hess = np.einsum("ki,kj->ij", su_z, q_su, optimize=False)
+        r_basis = basis * self._r_diag[:, None]  # R T
+        hess += np.einsum("ki,kj->ij", basis, r_basis, optimize=False)
+        grad = q_su.T @ err0
+        if self.config.regularize_about_weight:
+            u_ref = np.zeros(h * NU)  # nominal wrench: m g shared by the stance feet
+            n_stance = np.maximum(np.asarray(contact, dtype=bool).sum(axis=1), 1)
+            for k in range(h):
+                for i in range(2):
+                    if contact[k, i]:
+                        u_ref[NU * k + NU_FOOT * i + 2] = self.mass_kg * GRAVITY_MPS2 / n_stance[k]
+            grad -= r_basis.T @ u_ref
+        rows, lo, hi = [], [], []
+        for _, _, z0, (e, cz, l_, u_) in blocks:
+            if cz.shape[0] == 0:
+                continue
+            row = np.zeros((cz.shape[0], n_z))
+            row[:, z0 : z0 + e.shape[1]] = cz
+            rows.append(row)
+            lo.append(l_)
+            hi.append(u_)
+        if torque_limits is None:
+            limits = []
+        elif isinstance(torque_limits, tuple):
+            limits = [torque_limits]
+        else:
+            limits = list(torque_limits)
+        for i, mask, j_t, tau_max in limits:
             for k in np.flatnonzero(mask):
-                row = np.zeros((j_t.shape[0], h * NU))
-                col = NU * k + NU_FOOT * i
-                row[:, col : col + NU_FOOT] = j_t
+                row = j_t @ basis[NU * k + NU_FOOT * i : NU * k + NU_FOOT * (i + 1)]
+                if not np.any(row):
+                    continue  # the foot swings in this stage
                 rows.append(row)
                 lo.append(-tau_max)
                 hi.append(tau_max)
         problem = QPProblem(
             0.5 * (hess + hess.T),
             grad,
-            A=np.vstack(rows),
-            l=np.concatenate(lo),
-            u=np.concatenate(hi),
+            A=np.vstack(rows) if rows else None,
+            l=np.concatenate(lo) if lo else None,
+            u=np.concatenate(hi) if hi else None,
         )
-        return problem, free, su
+        return problem, free, su, basis
 
     def solve(
         self,
@@ -211,21 +285,25 @@ class SRBMMPC:
         contact: np.ndarray,
         feet_pos_m: np.ndarray,
         feet_yaw_rad: np.ndarray,
-        torque_limits: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None,
+        torque_limits: TorqueLimits | list[TorqueLimits] | None = None,
     ) -> SRBMPlan:
         """Solve one MPC problem; raises :class:`QPSolveError` if the QP fails."""
-        problem, free, su = self.build(
+        problem, free, su, basis = self.build(
             x0, x_ref, dts_s, contact, feet_pos_m, feet_yaw_rad, torque_limits
         )
-        sol = self.workspace.solve_or_raise(problem, warm_start=self._last_u)
-        self._last_u = sol.x
+        # Warm start: the previous wrenches projected on this solve's basis (T has
+        # orthonormal columns, so T^T U is the least-squares Z).
+        warm = None if self._last_u is None else basis.T @ self._last_u
+        sol = self.workspace.solve_or_raise(problem, warm_start=warm)
+        u = basis @ sol.x
+        self._last_u = u
         h = self.config.horizon
-        states = np.vstack([x0, (free + su @ sol.x).reshape(h, NX)])
-        return SRBMPlan(wrenches=sol.x.reshape(h, 2, NU_FOOT), states=states, solution=sol)
+        states = np.vstack([x0, (free + su @ u).reshape(h, NX)])
+        return SRBMPlan(wrenches=u.reshape(h, 2, NU_FOOT), states=states, solution=sol)
 
     def reset(self) -> None:
         self._last_u = None
         self.workspace.reset()
 
 
-__all__ = ["FEET", "NU", "NX", "SRBMMPC", "SRBMConfig", "SRBMPlan"]
+__all__ = ["FEET", "GRAVITY_MPS2", "NU", "NX", "SRBMMPC", "SRBMConfig", "SRBMPlan", "TorqueLimits"]

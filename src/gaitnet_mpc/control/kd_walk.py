@@ -1,0 +1,285 @@
+"""``kd``: walking with the implicit kino-dynamic sequential MPC (paper Sec. IV-B).
+
+At each step start the dt policy (here a fixed dt; Gait-Net later) sets the step's MPC
+sampling time and the full sequential solve runs (Algorithm 1, up to ``j_max`` QPs);
+during the step the same dt is kept and the MPC replans every ``replan_period_s`` (at
+least once per stage, Remark 4). The footholds the MPC chooses are the swing targets of
+the low-level controller; the next touchdown is bounded by the one-step terrain preview
+(eq. 24).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from gaitnet_mpc.control.base import Controller, MPCStats
+from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.errors import QPSolveError
+from gaitnet_mpc.gait import (
+    GaitSchedule,
+    GaitScheduleConfig,
+    RaibertConfig,
+    RaibertHeuristic,
+    SwingConfig,
+    SwingTrajectory,
+)
+from gaitnet_mpc.kinematics.reference import ReferenceTiming
+from gaitnet_mpc.mpc.implicit_kd import KDConfig
+from gaitnet_mpc.mpc.sequential import (
+    DtPolicy,
+    FixedDt,
+    SequentialConfig,
+    SequentialKDMPC,
+    SequentialResult,
+)
+from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.terrain import Course
+
+
+def walking_kd_config() -> KDConfig:
+    """Sub-problem weights used for walking (deviation from Table VIII, measured).
+
+    With ``H = [m p_c; angular pose]`` in kg m and kg m^2, Table VIII's uniform ``L^H = 200``
+    and ``L^{p_c} = (100, 100, 250)`` make a 2 cm lateral CoM shift cost ~60x more than a
+    0.1 rad trunk roll, so from single support the plan rolled the trunk (k_G,x up to 1.7
+    kg m^2/s) instead of swaying, and the robot tipped over within 0.7 s. Weighting the
+    angular pose and momentum 10x more and the linear pose and lateral CoM less keeps the
+    trunk upright; the robot then steps in place and walks (see the issue notes).
+    """
+    return KDConfig(
+        w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0),
+        w_momentum=(10.0, 10.0, 10.0, 100.0, 100.0, 100.0),
+        w_p_com=(10.0, 1.0, 250.0),
+    )
+
+
+@dataclass(frozen=True)
+class KDWalkConfig:
+    """Settings of the kino-dynamic walking controller."""
+
+    replan_period_s: float = 0.02
+    replan_j_max: int = 50
+    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
+    sequential: SequentialConfig = field(
+        default_factory=lambda: SequentialConfig(kd=walking_kd_config())
+    )
+    low_level: LowLevelConfig = field(default_factory=LowLevelConfig)
+    swing: SwingConfig = field(
+        default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
+    )
+    foothold_margin_m: float = 0.03  # eq. 24 boxes shrink by this inside each patch
+    touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
+
+
+@dataclass(frozen=True)
+class _RampedCommand:
+    vx_mps: float
+    vy_mps: float
+    yaw_rate_radps: float
+    heading_rad: float  # commanded trunk heading now
+
+
+class KDWalkController(Controller):
+    """Sequential implicit kino-dynamic MPC + gait schedule + low-level control."""
+
+    name = "kd"
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        course: Course,
+        command: object,
+        dt_policy: DtPolicy | None = None,
+        config: KDWalkConfig | None = None,
+    ) -> None:
+        self.robot = robot
+        self.course = course
+        self.command = command
+        self.config = config or KDWalkConfig()
+        self.dt_policy: DtPolicy = dt_policy or FixedDt()
+        kd = replace(
+            self.config.sequential.kd,
+            mass_kg=robot.total_mass_kg,
+            toe_m=robot.spec.foot_toe_m,
+            heel_m=robot.spec.foot_heel_m,
+        )
+        self.mpc = SequentialKDMPC(robot, replace(self.config.sequential, kd=kd))
+        self.low = LowLevelController(robot, self.config.low_level)
+        planar = robot.spec.planar
+        self.raibert = RaibertHeuristic(
+            RaibertConfig(
+                hip_lateral_offset_m=0.0 if planar else 0.065,
+                min_lateral_separation_m=0.0 if planar else 0.08,
+                max_lateral_separation_m=0.0 if planar else 0.30,
+            )
+        )
+        dt0 = self.dt_policy(np.zeros(1), np.zeros(1), None, 0.045)  # type: ignore[arg-type]
+        self.schedule = GaitSchedule(GaitScheduleConfig(default_dt_s=dt0))
+        self._stats = MPCStats()
+        self._steps: list[float] = []
+
+    # ---------------------------------------------------------------- episode
+    def reset(self, state: RobotState) -> None:
+        self.schedule.reset(state.t_s)
+        self.t0_s = state.t_s
+        self.yaw0 = float(state.base_rpy_rad[2])
+        self.ground_z = min(float(p[2]) for p in state.foot_pos_world_m.values())
+        self.ground_z -= self.robot.spec.foot_contact_radius_m
+        self.liftoff = {f: state.foot_pos_world_m[f].copy() for f in FEET}
+        self.swing: SwingTrajectory | None = None
+        self.plan: SequentialResult | None = None
+        self.next_replan_s = -np.inf
+        self._started_step = -1
+
+    @property
+    def mpc_stats(self) -> MPCStats:
+        return self._stats
+
+    @property
+    def step_durations_s(self) -> list[float]:
+        return self._steps
+
+    # ---------------------------------------------------------------- helpers
+    def _command_now(self, t_s: float) -> _RampedCommand:
+        c = self.command
+        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
+        k = min(1.0, (t_s - self.t0_s) * self.config.max_accel_mps2 / v_max)
+        return _RampedCommand(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps, self._heading(t_s))
+
+    def _heading(self, t_s: float) -> float:
+        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
+
+    def _raibert(
+        self, state: RobotState, foot: str, t_td: float, cmd: _RampedCommand
+    ) -> np.ndarray:
+        p = self.raibert.foothold(
+            foot,
+            p_com_world_m=state.com_world_m,
+            v_com_world_mps=state.com_vel_world_mps,
+            cmd_vel_mps=np.array([cmd.vx_mps, cmd.vy_mps]),
+            stance_duration_s=self.schedule.current_step_duration_s,
+            time_to_touchdown_s=t_td,
+            p_stance_foot_world_m=state.foot_pos_world_m[self.schedule.stance_foot],
+            ground_z_m=self.ground_z,
+            yaw_rad=float(state.base_rpy_rad[2]),
+            cmd_yaw_rate_radps=cmd.yaw_rate_radps,
+        )
+        patch = self.course.patch_at(p[0], p[1])
+        z = self.course.patches[patch].z_top_m if patch is not None else self.ground_z
+        p[2] = z + self.robot.spec.foot_contact_radius_m
+        if self.robot.spec.planar:
+            p[1] = state.foot_pos_world_m[foot][1]
+        return p
+
+    def _bounds(self, state: RobotState, foot: str) -> dict[str, tuple]:
+        """Eq. 24 box for the swing foot's next touchdown (one-step preview).
+
+        The patch is chosen from the CoM position predicted at touchdown (current CoM plus
+        its velocity times the time left in the step), which is where the CoM will be
+        when the foot lands.
+        """
+        t_left = self.schedule.time_left_in_step_s
+        p_td = state.com_world_m[:2] + state.com_vel_world_mps[:2] * t_left
+        lo, hi = self.course.foothold_bounds(p_td, foot, margin_m=self.config.foothold_margin_m)
+        r = self.robot.spec.foot_contact_radius_m
+        lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+        lo[2] += r
+        hi[2] += r
+        if self.robot.spec.planar:
+            lo[1], hi[1] = -np.inf, np.inf
+        return {foot: (lo, hi, None)}
+
+    # ---------------------------------------------------------------- planning
+    def _solve(self, state: RobotState, full: bool) -> None:
+        sched = self.schedule
+        q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
+        cmd = self._command_now(state.t_s)
+        timing = ReferenceTiming.from_horizon(sched.horizon())
+        swing, stance = sched.swing_foot, sched.stance_foot
+        t_left = sched.time_left_in_step_s
+        if full or self.plan is None:
+            target = self._raibert(state, swing, t_left, cmd)
+        else:
+            target = self.plan.touchdown(swing)
+            if target is None:
+                target = self._raibert(state, swing, t_left, cmd)
+        nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
+        footholds = {swing: target[None, :], stance: nxt[None, :]}
+        h = timing.horizon
+        yaw = np.full((h, 2), self._heading(state.t_s))
+        yaw[:, FEET.index(stance)] = state.foot_yaw_rad[stance]
+        try:
+            result = self.mpc.solve(
+                q,
+                v,
+                timing,
+                cmd,
+                footholds,
+                p_foot_now_m=state.foot_pos_world_m,
+                p_liftoff_m={swing: self.liftoff[swing]},
+                foot_yaw_rad=yaw,
+                foothold_bounds=self._bounds(state, swing),
+                j_max=None if full else self.config.replan_j_max,
+            )
+        except QPSolveError:
+            self._stats.record(0.0, 1, False, full)
+            return  # keep the last good plan
+        result.t_plan_s = state.t_s
+        self._stats.record(result.solve_time_s, result.n_qps, result.converged, full)
+        self.plan = result
+        td = result.touchdown(swing)
+        if td is not None and self.swing is not None:
+            td = td.copy()
+            td[2] -= self.config.touchdown_depth_m
+            if sched.phase_in_step < 0.85:
+                self.swing.retarget(td, sched.time_in_step_s)
+
+    def _start_step(self, state: RobotState) -> None:
+        sched = self.schedule
+        q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
+        iterate = self.plan.iterate if self.plan is not None else None
+        dt = sched.clip_dt(self.dt_policy(q, v, iterate, sched.current_step_dt_s))
+        sched.set_step_dt(dt)
+        self._steps.append(sched.current_step_duration_s)
+        swing = sched.swing_foot
+        self.liftoff[swing] = state.foot_pos_world_m[swing].copy()
+        cmd = self._command_now(state.t_s)
+        target = self._raibert(state, swing, sched.current_step_duration_s, cmd)
+        obstacles = self.course.obstacles_between(
+            min(self.liftoff[swing][0], target[0]) - 0.1,
+            max(self.liftoff[swing][0], target[0]) + 0.2,
+        )
+        self.swing = self.config.swing.trajectory(
+            self.liftoff[swing],
+            target,
+            sched.current_step_duration_s,
+            [(o.x_min, o.x_max, o.z_top_m) for o in obstacles],
+        )
+        self._solve(state, full=True)
+        self.next_replan_s = state.t_s + self.config.replan_period_s
+
+    # ---------------------------------------------------------------- control
+    def compute(self, state: RobotState) -> np.ndarray:
+        sched = self.schedule
+        sched.advance_to(state.t_s)
+        if sched.at_step_start and sched.step_index != self._started_step:
+            self._started_step = sched.step_index
+            self._start_step(state)
+        elif state.t_s >= self.next_replan_s:
+            self._solve(state, full=False)
+            self.next_replan_s = state.t_s + self.config.replan_period_s
+        stance, swing = sched.stance_foot, sched.swing_foot
+        wrench = {}
+        if self.plan is not None:
+            k = self.plan.stage_at(state.t_s)
+            i = FEET.index(stance)
+            wrench[stance] = np.concatenate(
+                [self.plan.iterate.f[k, i], self.plan.iterate.tau[k, i]]
+            )
+        t = sched.time_in_step_s
+        target = {swing: (self.swing.position(t), self.swing.velocity(t))}
+        yaw = None if self.robot.spec.planar else self._heading(state.t_s)
+        return self.low.torques(state, wrench, target, yaw)
