@@ -1,4 +1,7 @@
-"""The ``gaitnet-mpc run`` command: outputs, and clear errors on bad input."""
+"""The ``gaitnet-mpc`` commands: outputs, and clear errors on bad input.
+
+Plots and ``compare`` are tested in ``test_results.py``.
+"""
 
 from __future__ import annotations
 
@@ -47,9 +50,12 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
             "--out",
             str(out),
             "--no-progress",
+            "--no-plots",
         ]
     )
     assert rc == 0
+    assert not (out / "plots").exists()
+    assert (out / "course.json").is_file()
     summary = json.loads((out / "summary.json").read_text())
     assert SUMMARY_KEYS <= summary.keys()
     assert summary["fell"] is False
@@ -57,6 +63,11 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
     assert summary["mpc"] is None
     lines = (out / "log.csv").read_text().splitlines()
     assert len(lines) == 1 + 1200
+    header = lines[0].split(",")
+    for col in ("tau_abs_max_nm", "mpc_dt_s", "mpc_n_qps", "mpc_solve_ms", "stance_foot"):
+        assert col in header
+    last = dict(zip(header, lines[-1].split(","), strict=True))
+    assert last["mpc_dt_s"] == "nan" and last["stance_foot"] == "nan"  # no gait schedule
     import imageio.v3 as iio
 
     frames = iio.imread(out / "video.mp4")
@@ -88,3 +99,43 @@ def test_unknown_robot_is_an_argparse_error() -> None:
     with pytest.raises(SystemExit) as exc:
         main(["run", "--robot", "atlas"])
     assert exc.value.code == 2
+
+
+def test_viewer_without_a_display_fails_fast(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    out = tmp_path / "never"
+    rc = main(["run", "--viewer", "--duration", "0.1", "--out", str(out), "--no-progress"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "gaitnet-mpc: error: --viewer: got 'no display" in err
+    assert "drop --viewer" in err
+    assert not out.exists()  # failed before simulating anything
+
+
+def test_viewer_with_an_unreachable_display_fails_fast(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("DISPLAY", ":98765")  # no X server there
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    out = tmp_path / "never"
+    rc = main(["run", "--viewer", "--duration", "0.1", "--out", str(out), "--no-progress"])
+    assert rc == 2
+    assert "--viewer: got \"display ':98765'" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_subcommands_parse() -> None:
+    from gaitnet_mpc.cli import _build_parser
+
+    parser = _build_parser()
+    args = parser.parse_args(["plot", "runs/a"])
+    assert args.cmd == "plot" and args.run_dir == Path("runs/a")
+    args = parser.parse_args(["compare", "runs/a", "runs/b", "--out", "cmp"])
+    assert args.run_dirs == [Path("runs/a"), Path("runs/b")] and args.out == Path("cmp")
+    args = parser.parse_args(["run", "--no-plots", "--viewer"])
+    assert args.no_plots and args.viewer
+    with pytest.raises(SystemExit):
+        parser.parse_args(["compare"])  # at least one run folder

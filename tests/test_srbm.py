@@ -97,3 +97,100 @@ def test_humanoid_walks_forward_with_srbm_mpc() -> None:
     assert len(summary["footholds"]) >= 10
     assert summary["foothold_violations"] == 0
     assert summary["mpc"]["solves"] >= 250
+
+
+def test_regularisation_about_weight_keeps_full_support(mpc: SRBMMPC) -> None:
+    """Standing still on one foot under the CoM, the plan carries m g on every stage (a
+    force regulariser about zero would plan less and let the CoM sag)."""
+    h = mpc.config.horizon
+    x0, x_ref, dts, contact, feet = _horizon(h)
+    x_ref[:, 9] = 0.0
+    contact[:] = [True, False]
+    feet[:, 0] = [0.0, 0.0, 0.0]
+    plan = mpc.solve(x0, x_ref, dts, contact, feet, np.zeros((h, 2)))
+    np.testing.assert_allclose(plan.wrenches[:, 0, 2], 16.0 * 9.81, rtol=1e-3)
+    np.testing.assert_allclose(plan.states[:, 5], 0.55, atol=1e-4)
+
+
+def test_stage_weight_is_in_the_heading_frame(mpc: SRBMMPC) -> None:
+    """Forward/lateral CoM weights follow the reference heading."""
+    c = mpc.config
+    q0, q90 = mpc.stage_weight(0.0), mpc.stage_weight(np.pi / 2)
+    assert q0[3, 3] == pytest.approx(c.w_pos_m[0])
+    assert q0[4, 4] == pytest.approx(c.w_pos_m[1])
+    assert q90[3, 3] == pytest.approx(c.w_pos_m[1])  # world x is lateral when facing +y
+    assert q90[4, 4] == pytest.approx(c.w_pos_m[0])
+    assert q90[10, 10] == pytest.approx(c.w_vel[0])
+    np.testing.assert_allclose(q90, q90.T)
+
+
+def test_lip_foothold_gains_are_deadbeat_with_the_sway_orbit() -> None:
+    """On the LIP, the Raibert law with the LIP gains cancels a velocity error in one step
+    and its lateral fixed point is the sway orbit with the requested half-width."""
+    from gaitnet_mpc.control.srbm_walk import lip_gains
+
+    z0, step, d = 0.52, 0.225, 0.07
+    omega, k_v, offset, _ = lip_gains(z0, step, d)
+    ch, sh = np.cosh(omega * step), np.sinh(omega * step)
+    gain = 0.5 * step + k_v  # foothold per unit velocity
+
+    def stance(v_td: float, side: float) -> float:
+        """Lateral CoM velocity at the end of a stance on the foot placed by the law."""
+        r = side * offset + gain * v_td  # foot relative to the CoM at touchdown
+        return -r * omega * sh + v_td * ch
+
+    v, side = 0.4, 1.0  # a large disturbance
+    v = stance(v, side)
+    side = -side
+    for _ in range(6):  # after one step the velocity is on the orbit: +-V alternating
+        v_next = stance(v, side)
+        assert v_next == pytest.approx(-v, abs=1e-9)
+        v, side = v_next, -side
+    r = offset + gain * abs(v)
+    assert r == pytest.approx(d)
+
+
+def _walk(robot_name: str, vx: float, duration_s: float, pushes: tuple = ()) -> dict:
+    from gaitnet_mpc.control.srbm_walk import SRBMWalkController
+    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.sim.simulator import SimConfig, Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    robot = load_robot(robot_name)
+    course = load_course("flat")
+    sim = Simulator(robot, course, SimConfig(pushes=pushes))
+    command = Command(vx_mps=vx)
+    controller = SRBMWalkController(robot, course, command)
+    return run_episode(sim, controller, command, duration_s, progress=False)
+
+
+@pytest.mark.slow
+def test_humanoid_walks_at_half_a_metre_per_second() -> None:
+    """Closed loop, 3 s at 0.5 m/s: tracks the speed and walks straight."""
+    summary = _walk("humanoid3d", 0.5, 3.0)
+    assert not summary["fell"]
+    assert summary["distance_m"] > 1.1  # 1.25 m commanded after the 0.5 s ramp
+    assert summary["speed_rmse_mps"] < 0.1
+    assert abs(summary["lateral_drift_m"]) < 0.1
+    assert summary["foothold_violations"] == 0
+
+
+@pytest.mark.slow
+def test_humanoid_recovers_from_a_sideways_push() -> None:
+    """10 N s sideways (towards the stance foot, so the swinging foot cannot catch it)."""
+    from gaitnet_mpc.sim.disturbances import Push
+
+    push = Push.parse("t=1.5,fx=0,fy=50,dur=0.2")
+    summary = _walk("humanoid3d", 0.5, 3.5, (push,))
+    assert not summary["fell"]
+    assert summary["lateral_drift_m"] > 0.1  # it was pushed, and caught itself
+    assert summary["distance_m"] > 1.2
+
+
+@pytest.mark.slow
+def test_planar_biped_walks_with_srbm_mpc() -> None:
+    """The planar reduction of the same MPC walks the point-foot biped at 0.5 m/s."""
+    summary = _walk("biped2d", 0.5, 3.0)
+    assert not summary["fell"]
+    assert summary["distance_m"] > 1.0
+    assert summary["speed_rmse_mps"] < 0.15

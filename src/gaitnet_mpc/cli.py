@@ -1,4 +1,9 @@
-"""Command-line interface: ``gaitnet-mpc run ...``."""
+"""Command-line interface: ``gaitnet-mpc run | plot | compare``.
+
+* ``run``: simulate one episode and write a run folder (summary, logs, video, plots).
+* ``plot RUN_DIR``: (re)make the PNGs of ``RUN_DIR/plots/`` from the folder's files.
+* ``compare RUN_DIR RUN_DIR ... [--out DIR]``: one figure and one table over several runs.
+"""
 
 from __future__ import annotations
 
@@ -7,8 +12,12 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from gaitnet_mpc.errors import ConfigError, GaitNetMPCError
+
+if TYPE_CHECKING:
+    from gaitnet_mpc.sim.simulator import Simulator
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -39,8 +48,83 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0, help="seed for randomised courses")
     run.add_argument("--out", type=Path, default=None, help="run folder (default runs/<time>)")
     run.add_argument("--no-video", action="store_true", help="skip the MP4 video")
+    run.add_argument("--no-plots", action="store_true", help="skip the PNGs in plots/")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument(
+        "--viewer",
+        action="store_true",
+        help="watch the episode in MuJoCo's interactive viewer (needs a display)",
+    )
+    plot = sub.add_parser("plot", help="(re)make the plots of a run folder")
+    plot.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="folder written by `run`")
+    compare = sub.add_parser("compare", help="compare several run folders (figure + table)")
+    compare.add_argument("run_dirs", type=Path, nargs="+", metavar="RUN_DIR")
+    compare.add_argument(
+        "--out", type=Path, default=None, help="output folder (default runs/compare-<time>)"
+    )
     return parser
+
+
+def _has_display() -> bool:
+    """Whether an interactive window can be opened (X11 or Wayland on Linux)."""
+    if not sys.platform.startswith("linux"):
+        return True  # macOS / Windows: the viewer reports its own requirements
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _glfw_can_open() -> str | None:
+    """None if GLFW (the viewer's window library) initialises, else the reason it did not.
+
+    Probed here because ``mujoco.viewer.launch_passive`` initialises GLFW in a thread and
+    waits forever when that fails (e.g. ``DISPLAY`` set but no X server reachable).
+    """
+    import warnings
+
+    try:
+        import glfw
+    except ImportError as exc:  # pragma: no cover - glfw is a mujoco dependency
+        return f"the glfw package is missing ({exc})"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ok = glfw.init()
+    if ok:
+        glfw.terminate()
+        return None
+    return "; ".join(str(w.message) for w in caught) or "glfw.init() failed"
+
+
+def _check_viewer() -> None:
+    """Fail fast when ``--viewer`` cannot open a window."""
+    if not _has_display():
+        raise ConfigError(
+            "--viewer",
+            "no display (DISPLAY and WAYLAND_DISPLAY are unset)",
+            "a graphical session for MuJoCo's interactive viewer; without one, drop "
+            "--viewer and watch video.mp4 (rendered offscreen)",
+        )
+    if sys.platform.startswith("linux"):
+        reason = _glfw_can_open()
+        if reason is not None:
+            display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+            raise ConfigError(
+                "--viewer",
+                f"display {display!r} ({reason})",
+                "a display the viewer can open; without one, drop --viewer and watch "
+                "video.mp4 (rendered offscreen)",
+            )
+
+
+def _open_viewer(sim: Simulator, trunk_body: str) -> Any:
+    """MuJoCo's passive viewer on the simulator, its camera tracking the trunk."""
+    import mujoco
+    import mujoco.viewer
+
+    handle = mujoco.viewer.launch_passive(sim.model, sim.data)
+    with handle.lock():
+        handle.cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        handle.cam.trackbodyid = sim.model.body(trunk_body).id
+        handle.cam.distance = 2.5
+    return handle
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -53,6 +137,8 @@ def _run(args: argparse.Namespace) -> int:
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator
     from gaitnet_mpc.terrain import load_course
 
+    if args.viewer:
+        _check_viewer()
     command = Command(args.vx, args.vy, args.yaw_rate)
     pushes = tuple(Push.parse(p) for p in args.push)
     robot = load_robot(args.robot)
@@ -80,16 +166,29 @@ def _run(args: argparse.Namespace) -> int:
         "seed": args.seed,
     }
     video = None if args.no_video else VideoConfig()
-    summary = run_episode(
-        sim,
-        controller,
-        command,
-        args.duration,
-        out,
-        video,
-        progress=not args.no_progress,
-        meta=meta,
-    )
+    viewer = _open_viewer(sim, robot.spec.trunk_body) if args.viewer else None
+    try:
+        summary = run_episode(
+            sim,
+            controller,
+            command,
+            args.duration,
+            out,
+            video,
+            progress=not args.no_progress,
+            meta=meta,
+            viewer=viewer,
+        )
+    finally:
+        if viewer is not None:
+            viewer.close()
+    plots_s = None
+    if not args.no_plots:
+        from gaitnet_mpc.results.plots import make_plots
+
+        t0 = time.perf_counter()
+        make_plots(out)
+        plots_s = time.perf_counter() - t0
     brief = {
         k: summary[k]
         for k in (
@@ -103,6 +202,34 @@ def _run(args: argparse.Namespace) -> int:
         )
     }
     print(json.dumps(brief, indent=2))
+    render_s = summary["render_time_s"]
+    timing = f"simulation {summary['wall_time_s'] - render_s:.1f} s, video {render_s:.1f} s"
+    if plots_s is not None:
+        timing += f", plots {plots_s:.1f} s"
+    print(f"wall time: {timing}")
+    print(f"results in {out}/")
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.results.plots import make_plots
+
+    written = make_plots(args.run_dir)
+    for path in written:
+        print(path)
+    if not written:
+        print(f"{args.run_dir}: empty log, no plots written", file=sys.stderr)
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    import time
+
+    from gaitnet_mpc.results.compare import compare_runs
+
+    out = args.out or Path("runs") / time.strftime("compare-%Y%m%d-%H%M%S")
+    paths = compare_runs(args.run_dirs, out)
+    print(paths["markdown"].read_text(), end="")
     print(f"results in {out}/")
     return 0
 
@@ -114,6 +241,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.cmd == "run":
             return _run(args)
+        if args.cmd == "plot":
+            return _plot(args)
+        if args.cmd == "compare":
+            return _compare(args)
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return 2

@@ -587,6 +587,62 @@ class Course:
         z = p.z_top_m
         return np.array([x_lo, y_lo, z - z_tol_m]), np.array([x_hi, y_hi, z + z_tol_m])
 
+    def reachable_foothold_bounds(
+        self,
+        p_com_td_xy: ArrayLike,
+        foot: str,
+        p_nominal_xy: ArrayLike,
+        *,
+        reach_x_m: float = 0.12,
+        reach_y_m: float = 0.25,
+        margin_m: float = 0.03,
+    ) -> tuple[np.ndarray, np.ndarray, int | None]:
+        """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step preview).
+
+        The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
+        (the hip is above it). Among the patches that allow ``foot``, each shrunk by
+        ``margin_m``, those whose box meets that window are candidates; the one closest to
+        the nominal foothold ``p_nominal_xy`` wins and the bounds are its box cut to the
+        window. If no patch meets the window, the patch closest to the window is used (the
+        foot will land short or long of it, and the MPC should see the bound anyway).
+
+        Returns:
+            ``(p_min (3,), p_max (3,), patch index or None)``; z bounds are the patch top.
+        """
+        foot = _check_foot(foot)
+        xc, yc = _point_xy(p_com_td_xy, "p_com_td_xy")
+        xn, yn = _point_xy(p_nominal_xy, "p_nominal_xy")
+        win = (xc - reach_x_m, xc + reach_x_m, yc - reach_y_m, yc + reach_y_m)
+        best: tuple[float, int, tuple[float, float, float, float]] | None = None
+        fallback: tuple[float, int] | None = None
+        for i, patch in enumerate(self.patches):
+            if not patch.allows(foot):
+                continue
+            x_lo, x_hi = _shrink(patch.x_min, patch.x_max, margin_m)
+            y_lo, y_hi = _shrink(patch.y_min, patch.y_max, margin_m)
+            box = (max(x_lo, win[0]), min(x_hi, win[1]), max(y_lo, win[2]), min(y_hi, win[3]))
+            if box[0] <= box[1] and box[2] <= box[3]:
+                dx = max(box[0] - xn, 0.0, xn - box[1])
+                dy = max(box[2] - yn, 0.0, yn - box[3])
+                score = dx * dx + dy * dy
+                if best is None or score < best[0]:
+                    best = (score, i, box)
+            else:
+                gap = _rect_distance(xc, yc, x_lo, x_hi, y_lo, y_hi)
+                if fallback is None or gap < fallback[0]:
+                    fallback = (gap, i)
+        if best is not None:
+            _, i, (x_lo, x_hi, y_lo, y_hi) = best
+        elif fallback is not None:
+            i = fallback[1]
+            patch = self.patches[i]
+            x_lo, x_hi = _shrink(patch.x_min, patch.x_max, margin_m)
+            y_lo, y_hi = _shrink(patch.y_min, patch.y_max, margin_m)
+        else:
+            return np.array([win[0], win[2], 0.0]), np.array([win[1], win[3], 0.0]), None
+        z = self.patches[i].z_top_m
+        return np.array([x_lo, y_lo, z]), np.array([x_hi, y_hi, z]), i
+
 
 def _top_patch_index(patches: Sequence[Patch], x: float, y: float) -> int | None:
     """Index of the highest patch holding (x, y) (ties: lowest index), None if none does."""

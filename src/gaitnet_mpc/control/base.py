@@ -35,13 +35,25 @@ class MPCStats:
                 "qps_per_solve_mean": None,
             }
         ms = 1e3 * np.asarray(self.solve_time_s)
-        return {
+        qps = np.asarray(self.qps_per_solve, dtype=float)
+        full = np.asarray(self.full_solve, dtype=bool)
+        out: dict[str, float | int | None] = {
             "solves": len(ms),
             "solve_ms_median": float(np.median(ms)),
             "solve_ms_p99": float(np.percentile(ms, 99)),
-            "qps_per_solve_mean": float(np.mean(self.qps_per_solve)),
+            "qps_per_solve_mean": float(np.mean(qps)),
             "converged_fraction": float(np.mean(self.converged)),
         }
+        for name, mask in (("full", full), ("replan", ~full)):
+            if np.any(mask):
+                out[f"{name}_solves"] = int(mask.sum())
+                out[f"{name}_ms_median"] = float(np.median(ms[mask]))
+                out[f"{name}_ms_p99"] = float(np.percentile(ms[mask], 99))
+                out[f"qps_per_{name}_mean"] = float(np.mean(qps[mask]))
+                out[f"{name}_not_converged_fraction"] = float(
+                    1.0 - np.mean(np.asarray(self.converged)[mask])
+                )
+        return out
 
 
 class Controller(ABC):

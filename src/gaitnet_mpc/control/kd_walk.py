@@ -53,6 +53,8 @@ def walking_kd_config() -> KDConfig:
         w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0),
         w_momentum=(10.0, 10.0, 10.0, 100.0, 100.0, 100.0),
         w_p_com=(10.0, 1.0, 250.0),
+        # The sub-problem checks its inputs itself; skip the QP layer's second check.
+        qp_options=(("check_problem", False),),
     )
 
 
@@ -70,7 +72,11 @@ class KDWalkConfig:
     swing: SwingConfig = field(
         default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
     )
-    foothold_margin_m: float = 0.03  # eq. 24 boxes shrink by this inside each patch
+    max_path_error_m: float = 0.05  # clamp of the CoM path correction
+    # Eq. 24 boxes shrink by this inside each patch; it covers the swing foot's measured
+    # ~3 cm overshoot at touchdown (joint PD lag) besides keeping the foot centre inside.
+    foothold_margin_m: float = 0.05
+    foothold_reach_m: float = 0.12  # |x_foot - x_com| at touchdown the legs can reach
     touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
 
 
@@ -126,6 +132,7 @@ class KDWalkController(Controller):
         self.schedule.reset(state.t_s)
         self.t0_s = state.t_s
         self.yaw0 = float(state.base_rpy_rad[2])
+        self.com0 = state.com_world_m.copy()
         self.ground_z = min(float(p[2]) for p in state.foot_pos_world_m.values())
         self.ground_z -= self.robot.spec.foot_contact_radius_m
         self.liftoff = {f: state.foot_pos_world_m[f].copy() for f in FEET}
@@ -174,18 +181,41 @@ class KDWalkController(Controller):
             p[1] = state.foot_pos_world_m[foot][1]
         return p
 
-    def _bounds(self, state: RobotState, foot: str) -> dict[str, tuple]:
+    def _path_start(self, state: RobotState) -> np.ndarray:
+        """Start of the reference CoM path: the measured CoM moved toward the commanded
+        path (the ramped command integrated from the start) by at most
+        ``max_path_error_m``, so that drift is corrected without a wind-up."""
+        c = self.command
+        t = state.t_s - self.t0_s
+        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
+        t_ramp = v_max / self.config.max_accel_mps2
+        travel = t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
+        yaw = self._heading(state.t_s)
+        cy, sy = np.cos(yaw), np.sin(yaw)
+        step = travel * np.array([cy * c.vx_mps - sy * c.vy_mps, sy * c.vx_mps + cy * c.vy_mps])
+        lim = self.config.max_path_error_m
+        out = state.com_world_m.copy()
+        out[:2] += np.clip(self.com0[:2] + step - out[:2], -lim, lim)
+        return out
+
+    def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, tuple]:
         """Eq. 24 box for the swing foot's next touchdown (one-step preview).
 
-        The patch is chosen from the CoM position predicted at touchdown (current CoM plus
-        its velocity times the time left in the step), which is where the CoM will be
-        when the foot lands.
+        The patch is chosen by kinematic reach from the CoM predicted at touchdown
+        (current CoM plus its velocity times the time left in the step), preferring the
+        patch nearest the nominal (heuristic) foothold: :meth:`Course.reachable_foothold_bounds`.
         """
         t_left = self.schedule.time_left_in_step_s
         p_td = state.com_world_m[:2] + state.com_vel_world_mps[:2] * t_left
-        lo, hi = self.course.foothold_bounds(p_td, foot, margin_m=self.config.foothold_margin_m)
+        lo, hi, _ = self.course.reachable_foothold_bounds(
+            p_td,
+            foot,
+            nominal[:2],
+            reach_x_m=self.config.foothold_reach_m,
+            margin_m=self.config.foothold_margin_m,
+        )
         r = self.robot.spec.foot_contact_radius_m
-        lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+        lo, hi = lo.copy(), hi.copy()
         lo[2] += r
         hi[2] += r
         if self.robot.spec.planar:
@@ -221,8 +251,9 @@ class KDWalkController(Controller):
                 p_foot_now_m=state.foot_pos_world_m,
                 p_liftoff_m={swing: self.liftoff[swing]},
                 foot_yaw_rad=yaw,
-                foothold_bounds=self._bounds(state, swing),
+                foothold_bounds=self._bounds(state, swing, target),
                 j_max=None if full else self.config.replan_j_max,
+                p_com_start_m=self._path_start(state),
             )
         except QPSolveError:
             self._stats.record(0.0, 1, False, full)

@@ -81,7 +81,20 @@ class SRBMWalkConfig:
     retarget_stop_fraction: float = 0.8  # footholds are frozen in the last 20 % of a swing
     stance_half_width_m: float = 0.07  # lateral CoM-to-foot distance of the sway orbit
     max_step_m: float = 0.35  # forward/backward foothold limit from the stance foot
+    min_lateral_separation_m: float = 0.08  # feet never closer sideways (legs collide)
+    # Widest step sideways from the stance foot. The hip roll reaches 0.6 rad outward, about
+    # 0.22 m beside the hip at walking height, so 0.40 m between the feet is reachable;
+    # it is what catching a 10 N s sideways push needs (0.30 m was not enough).
+    max_lateral_separation_m: float = 0.40
     early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
+    # Swing-tracking bias compensation: the joint-PD swing leg (no inertial feedforward)
+    # lands the foot 3 cm (0.5 m/s) to 5 cm (1 m/s) beyond its target, which puts the
+    # stance foot ahead of where the LIP law wants it and costs ~10 % of the speed. The
+    # overshoot (touchdown point minus swing target, heading frame, lateral outward) is
+    # averaged over steps and subtracted from later swing targets; the MPC and the LIP
+    # keep using the intended foothold.
+    landing_bias_gain: float = 0.3  # per-step weight of the new measurement
+    landing_bias_max_m: float = 0.06
     # Stance legs get tau = [g(q) - J^T lambda]_leg (control/stance.py with qdd = 0) rather
     # than -J^T lambda alone: without the leg's own gravity torques the ground reaction
     # exceeds the MPC's wrench by about 12 N (the weight of the lower leg pushing on the
@@ -183,14 +196,16 @@ class SRBMWalkController(Controller):
                 hip_lateral_offset_m=0.0 if planar else lateral,
                 velocity_gain_s=k_v,
                 max_step_m=c.max_step_m,
-                min_lateral_separation_m=0.0 if planar else 0.08,
-                max_lateral_separation_m=0.0 if planar else 0.30,
+                min_lateral_separation_m=0.0 if planar else c.min_lateral_separation_m,
+                max_lateral_separation_m=0.0 if planar else c.max_lateral_separation_m,
             )
         )
         self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
         self.foothold = dict(self.foot_pos)
         self.swing: SwingTrajectory | None = None
         self.landed = False
+        self.bias_measured = True
+        self.land_bias = np.zeros(2)  # (forward, outward) swing overshoot [m]
         self.step_seen = -1
         self.wrench: np.ndarray | None = None
         self.next_replan_s = -np.inf
@@ -239,7 +254,12 @@ class SRBMWalkController(Controller):
             self.path_xy = state.com_world_m[:2] + err * (self.config.path_max_error_m / norm)
 
     def _x0(self, state: RobotState) -> np.ndarray:
-        rpy = state.base_rpy_rad
+        rpy = state.base_rpy_rad.copy()
+        # The measured yaw lives in (-pi, pi]; the reference heading is integrated without
+        # wrapping, so express the measurement within pi of it (a turn past pi would
+        # otherwise show the MPC a 2 pi heading error).
+        ref = self._heading_cmd(state.t_s)
+        rpy[2] = ref + (rpy[2] - ref + np.pi) % (2.0 * np.pi) - np.pi
         return np.concatenate(
             [rpy, state.com_world_m, state.base_ang_vel_world_radps, state.com_vel_world_mps, [1]]
         )
@@ -341,14 +361,43 @@ class SRBMWalkController(Controller):
             state, sched.swing_foot, p_td, v_td, p_st, state.t_s + t_left_s, stance_s
         )
 
+    def _measure_landing(self, state: RobotState, foot: str) -> None:
+        """Update the swing overshoot estimate with ``foot``'s touchdown point."""
+        if self.bias_measured or self.swing is None:
+            return
+        self.bias_measured = True
+        yaw = self._heading_cmd(state.t_s)
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        ex, ey = state.foot_pos_world_m[foot][:2] - self.swing.p1_world_m[:2]
+        side = 1.0 if foot == "left" else -1.0
+        err = np.array([c * ex + s_ * ey, side * (-s_ * ex + c * ey)])
+        if self.robot.spec.planar:
+            err[1] = 0.0  # the planar model's feet cannot move sideways
+        k, lim = self.config.landing_bias_gain, self.config.landing_bias_max_m
+        self.land_bias = np.clip(self.land_bias + k * (err - self.land_bias), -lim, lim)
+
+    def _swing_target(self, foot: str, foothold: np.ndarray, t_s: float) -> np.ndarray:
+        """Where to aim the swing foot so that it lands on ``foothold`` (bias removed)."""
+        yaw = self._heading_cmd(t_s)
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        side = 1.0 if foot == "left" else -1.0
+        fwd, out = self.land_bias[0], side * self.land_bias[1]
+        target = foothold.copy()
+        target[:2] -= np.array([c * fwd - s_ * out, s_ * fwd + c * out])
+        return target
+
     def _on_step_start(self, state: RobotState) -> None:
         sched = self.schedule
+        if sched.step_index > 0:
+            self._measure_landing(state, sched.stance_foot)  # it never touched down early
         self._steps.append(sched.current_step_duration_s)
         swing_foot = sched.swing_foot
         self.landed = False
+        self.bias_measured = False
         self.foot_pos[sched.stance_foot] = state.foot_pos_world_m[sched.stance_foot].copy()
-        target = self._plan_swing_foothold(state, sched.current_step_duration_s)
-        self.foothold[swing_foot] = target
+        foothold = self._plan_swing_foothold(state, sched.current_step_duration_s)
+        self.foothold[swing_foot] = foothold
+        target = self._swing_target(swing_foot, foothold, state.t_s + sched.time_left_in_step_s)
         obstacles = self.course.obstacles_between(
             min(state.foot_pos_world_m[swing_foot][0], target[0]),
             max(state.foot_pos_world_m[swing_foot][0], target[0]),
@@ -371,9 +420,11 @@ class SRBMWalkController(Controller):
             or sched.phase_in_step > self.config.retarget_stop_fraction
         ):
             return
-        target = self._plan_swing_foothold(state, sched.time_left_in_step_s)
+        foot = sched.swing_foot
+        foothold = self._plan_swing_foothold(state, sched.time_left_in_step_s)
+        target = self._swing_target(foot, foothold, state.t_s + sched.time_left_in_step_s)
         if self.swing.retarget(target, sched.time_in_step_s):
-            self.foothold[sched.swing_foot] = target
+            self.foothold[foot] = foothold
 
     def _torque_limits(
         self, state: RobotState, feet: list[tuple[int, np.ndarray]]
@@ -459,6 +510,7 @@ class SRBMWalkController(Controller):
             # Early touchdown: stance from now on (double support for the rest of the step).
             self.landed = True
             self.next_replan_s = -np.inf
+            self._measure_landing(state, swing)
         if state.t_s >= self.next_replan_s:
             self._update_foothold(state)
             self._replan(state)

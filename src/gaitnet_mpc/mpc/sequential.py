@@ -161,6 +161,7 @@ class SequentialKDMPC:
         foot_yaw_rad: np.ndarray,
         foothold_bounds: Mapping[str, tuple[np.ndarray, np.ndarray, None]] | None = None,
         j_max: int | None = None,
+        p_com_start_m: np.ndarray | None = None,
     ) -> SequentialResult:
         """Run Algorithm 1 from the measured state (q, v) in Pinocchio coordinates.
 
@@ -174,6 +175,8 @@ class SequentialKDMPC:
             foot_yaw_rad: (h, 2) foot headings for the line-foot wrench limits.
             foothold_bounds: eq. 24 boxes for the next touchdown (one-step preview).
             j_max: iteration cap (default ``config.j_max``).
+            p_com_start_m: start of the reference CoM path (default: the measured CoM);
+                a point on the commanded path lets the MPC correct drift.
         """
         t0 = time.perf_counter()
         cfg = self.config
@@ -202,6 +205,7 @@ class SequentialKDMPC:
             footholds,
             p_foot_now_m=p_foot_now_m,
             p_liftoff_m=p_liftoff_m,
+            p_com_start_m=p_com_start_m,
             pose0_angular_kgm2=pose0_ref,
             workspace=self.ref_workspace,
         )

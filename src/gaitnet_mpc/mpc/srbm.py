@@ -46,9 +46,15 @@ class SRBMConfig:
 
     horizon: int = 10
     w_rpy: tuple[float, float, float] = (300.0, 300.0, 100.0)
-    w_pos_m: tuple[float, float, float] = (50.0, 50.0, 500.0)
+    # CoM position and velocity weights are (forward, lateral, vertical) in the heading
+    # frame of each stage (the reference yaw). The lateral ones are small on purpose: a
+    # line foot cannot exert a moment about its long axis, so the MPC can only change the
+    # lateral CoM velocity by rolling the trunk (hip strategy). Tracking vy = 0 strongly
+    # fights the natural step-to-step sway and leaves a lean of ~0.025 rad with a steady
+    # sideways drift of ~0.06 m/s; the lateral CoM is governed by the footholds instead.
+    w_pos_m: tuple[float, float, float] = (50.0, 1.0, 500.0)
     w_omega: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    w_vel: tuple[float, float, float] = (20.0, 20.0, 10.0)
+    w_vel: tuple[float, float, float] = (20.0, 0.5, 10.0)
     w_force: float = 1e-4  # paper Table VIII, L^f
     w_moment: float = 1e-3  # paper Table VIII, L^tau
     # Regularise the wrench about the gravity-compensating one (m g shared by the stance
@@ -92,8 +98,7 @@ class SRBMMPC:
         self._last_u: np.ndarray | None = None
         self._block_cache: dict[tuple[float, bool], tuple] = {}
         c = self.config
-        diag = np.concatenate([c.w_rpy, c.w_pos_m, c.w_omega, c.w_vel, [0.0]])
-        self._q_diag = np.tile(diag, c.horizon)
+        self._q_stage = np.diag(np.concatenate([c.w_rpy, c.w_pos_m, c.w_omega, c.w_vel, [0.0]]))
         r_foot = [c.w_force] * 3 + [c.w_moment] * 3
         self._r_diag = np.tile(r_foot * 2, c.horizon)
 
@@ -145,6 +150,16 @@ class SRBMMPC:
             su[rows, NU * k : NU * k + NU] = b_k
             prev_rows = rows
         return sx, su
+
+    def stage_weight(self, yaw_rad: float) -> np.ndarray:
+        """State weight (13, 13) of one stage: the horizontal CoM position and velocity
+        weights rotated from the heading frame at ``yaw_rad`` to the world."""
+        c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+        rot = np.array([[c, -s], [s, c]])
+        q = self._q_stage.copy()
+        for i in (3, 9):  # position, velocity
+            q[i : i + 2, i : i + 2] = rot @ q[i : i + 2, i : i + 2] @ rot.T
+        return q
 
     # ---------------------------------------------------------------- solve
     def _foot_block(
@@ -230,7 +245,10 @@ class SRBMMPC:
             col = NU * k + NU_FOOT * i
             basis[col : col + NU_FOOT, z0 : z0 + e.shape[1]] = e
             su_z[:, z0 : z0 + e.shape[1]] = su[:, col : col + NU_FOOT] @ e
-        q_su = su_z * self._q_diag[:, None]
+        q_su = np.empty_like(su_z)  # Q Su T, Q block-diagonal with one block per stage
+        for k in range(h):
+            rows = slice(NX * k, NX * k + NX)
+            q_su[rows] = self.stage_weight(float(x_ref[k + 1, 2])) @ su_z[rows]
         # einsum instead of BLAS: on a loaded machine a multi-threaded BLAS call on these
         # small matrices can stall for tens of milliseconds.
         hess = np.einsum("ki,kj->ij", su_z, q_su, optimize=False)

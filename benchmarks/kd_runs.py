@@ -1,0 +1,91 @@
+"""Closed-loop outcomes of the ``kd`` controller (issue: implicit kino-dynamic MPC).
+
+Runs every scenario of the acceptance matrix through :func:`run_episode` (the code path of
+``gaitnet-mpc run``) and writes ``benchmarks/results/kd_runs.md``. Scenarios run in a
+process pool (``--jobs``, default 2). Run: ``.venv/bin/python benchmarks/kd_runs.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from machine import machine_info
+
+# (label, robot, course, vx [m/s], fixed dt [s], duration [s])
+SCENARIOS: tuple[tuple[str, str, str, float, float, float], ...] = (
+    ("flat 0.75 m/s", "humanoid3d", "flat", 0.75, 0.045, 20.0),
+    ("gap 0.20 m, dt 0.045", "humanoid3d", "gap", 0.75, 0.045, 6.0),
+    ("gap 0.20 m, dt 0.055", "humanoid3d", "gap", 0.75, 0.055, 6.0),
+    ("gap 0.20 m, dt 0.065", "humanoid3d", "gap", 0.75, 0.065, 6.0),
+    ("stepping-stones, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0),
+    ("stepping-stones, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0),
+    ("stepping-stones, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0),
+    ("biped2d flat 0.5 m/s", "biped2d", "flat", 0.5, 0.045, 20.0),
+)
+
+
+def run(scenario: tuple[str, str, str, float, float, float]) -> dict:
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.mpc.sequential import FixedDt
+    from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.sim.simulator import Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    label, robot_name, course_name, vx, dt, duration = scenario
+    robot = load_robot(robot_name)
+    course = load_course(course_name)
+    command = Command(vx_mps=vx)
+    ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt))
+    summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
+    return {"label": label, **summary}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    with ProcessPoolExecutor(args.jobs) as pool:
+        results = list(pool.map(run, SCENARIOS))
+    lines = [
+        "# kd controller: closed-loop outcomes",
+        "",
+        machine_info(("numpy", "mujoco", "pin", "piqp")),
+        "",
+        "| scenario | fell | fall t [s] | distance [m] | speed RMSE [m/s] | touchdowns | "
+        "violations | QPs/full solve | QPs/replan | full ms (median) | replan ms (median) | "
+        "hit j_max | RTF |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        m = r["mpc"]
+        rmse = r["speed_rmse_mps"]
+        hit = 1.0 - m["converged_fraction"]
+        lines.append(
+            f"| {r['label']} | {'yes' if r['fell'] else 'no'} | "
+            f"{r['fall_time_s'] if r['fell'] else '-'} | {r['distance_m']:.2f} | "
+            f"{rmse:.3f} | {len(r['footholds'])} | {r['foothold_violations']} | "
+            f"{m.get('qps_per_full_mean', float('nan')):.1f} | "
+            f"{m.get('qps_per_replan_mean', float('nan')):.1f} | "
+            f"{m.get('full_ms_median', float('nan')):.0f} | "
+            f"{m.get('replan_ms_median', float('nan')):.0f} | {100 * hit:.0f} % | "
+            f"{r['realtime_factor']:.2f} |"
+        )
+    lines += [
+        "",
+        "Commands: the same scenario with the CLI is `gaitnet-mpc run --controller kd "
+        "--robot ROBOT --course COURSE --vx VX --dt DT --duration T`.",
+        "",
+    ]
+    report = "\n".join(lines)
+    out = Path(__file__).parent / "results" / "kd_runs.md"
+    out.write_text(report)
+    print(report)
+
+
+if __name__ == "__main__":
+    main()

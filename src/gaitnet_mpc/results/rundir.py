@@ -1,0 +1,124 @@
+"""Reading a run folder and writing result files atomically.
+
+A run folder (written by ``gaitnet-mpc run``, see :mod:`gaitnet_mpc.sim.episode`) holds
+``summary.json``, ``log.csv`` (one row per control tick), ``mpc_log.csv`` (one row per MPC
+solve, MPC controllers only), ``course.json``, ``video.mp4`` and ``plots/``. Everything
+here reads only those files, so plots and comparisons can be re-made at any time.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gaitnet_mpc.errors import ConfigError, CourseFormatError
+from gaitnet_mpc.terrain import Course
+
+SUMMARY = "summary.json"
+LOG = "log.csv"
+MPC_LOG = "mpc_log.csv"
+COURSE = "course.json"
+VIDEO = "video.mp4"
+PLOTS_DIR = "plots"
+
+
+def read_csv_columns(path: str | Path) -> dict[str, np.ndarray]:
+    """Columns of a CSV file with one header line, as ``name -> (n,) float array``.
+
+    Missing values (``nan``) stay NaN. A file with only a header gives empty columns.
+    """
+    text = Path(path).read_text()
+    lines = text.splitlines()
+    if not lines:
+        raise ConfigError(str(path), "an empty file", "a CSV file with a header line")
+    names = [c.strip() for c in lines[0].split(",")]
+    if len(lines) < 2:
+        return {n: np.zeros(0) for n in names}
+    try:
+        data = np.loadtxt(io.StringIO("\n".join(lines[1:])), delimiter=",", ndmin=2)
+    except ValueError as exc:
+        raise ConfigError(str(path), "unreadable rows", f"numeric CSV rows ({exc})") from exc
+    if data.shape[1] != len(names):
+        raise ConfigError(str(path), f"{data.shape[1]} columns", f"{len(names)} (the header)")
+    return {n: data[:, i] for i, n in enumerate(names)}
+
+
+@dataclass(frozen=True)
+class RunFolder:
+    """The files of one run folder, loaded.
+
+    Attributes:
+        path: the folder.
+        summary: ``summary.json``.
+        log: ``log.csv`` columns (per control tick).
+        mpc_log: ``mpc_log.csv`` columns (per MPC solve), or None when absent.
+        course: ``course.json`` as a :class:`Course`, or None when absent (older runs).
+    """
+
+    path: Path
+    summary: dict[str, Any]
+    log: dict[str, np.ndarray]
+    mpc_log: dict[str, np.ndarray] | None
+    course: Course | None
+
+    @property
+    def label(self) -> str:
+        """Short name of the run: the folder name."""
+        return self.path.name or str(self.path)
+
+    def column(self, name: str) -> np.ndarray | None:
+        """A ``log.csv`` column, or None if this log lacks it (older runs)."""
+        return self.log.get(name)
+
+    @property
+    def plots_dir(self) -> Path:
+        return self.path / PLOTS_DIR
+
+
+def load_run(path: str | Path) -> RunFolder:
+    """Load a run folder; raises :class:`ConfigError` naming the missing or bad file."""
+    root = Path(path)
+    expected = "a run folder written by `gaitnet-mpc run` (with summary.json and log.csv)"
+    if not root.is_dir():
+        raise ConfigError("RUN_DIR", str(path), expected)
+    for name in (SUMMARY, LOG):
+        if not (root / name).is_file():
+            raise ConfigError("RUN_DIR", str(path), f"{expected}; {name} is missing")
+    try:
+        summary = json.loads((root / SUMMARY).read_text())
+    except json.JSONDecodeError as exc:
+        raise ConfigError(str(root / SUMMARY), "invalid JSON", f"valid JSON ({exc})") from exc
+    if not isinstance(summary, dict):
+        raise ConfigError(str(root / SUMMARY), type(summary).__name__, "a JSON object")
+    log = read_csv_columns(root / LOG)
+    mpc_log = read_csv_columns(root / MPC_LOG) if (root / MPC_LOG).is_file() else None
+    course = None
+    if (root / COURSE).is_file():
+        try:
+            course = Course.from_json(root / COURSE)
+        except CourseFormatError:
+            course = None  # the top view is then drawn without the terrain
+    return RunFolder(root, summary, log, mpc_log, course)
+
+
+def save_figure_atomic(fig: Any, path: str | Path, dpi: int = 110) -> Path:
+    """Save a matplotlib figure as PNG through a temporary file and an atomic rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, format="png", dpi=dpi)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

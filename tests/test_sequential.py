@@ -1,0 +1,78 @@
+"""Algorithm 1 (sequential convex MPC) and the kd walking controller."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.robots import FEET, load_robot
+from gaitnet_mpc.sim.episode import Command, run_episode
+from gaitnet_mpc.sim.simulator import Simulator
+from gaitnet_mpc.terrain import load_course
+
+
+@pytest.fixture(scope="module")
+def humanoid():
+    return load_robot("humanoid3d")
+
+
+def _first_plan(robot, course, command):
+    sim = Simulator(robot, course)
+    ctrl = KDWalkController(robot, course, command)
+    state = sim.state()
+    ctrl.reset(state)
+    ctrl.compute(state)
+    return ctrl, state
+
+
+def test_full_solve_converges_within_table_x_tolerances(humanoid) -> None:
+    ctrl, _ = _first_plan(humanoid, load_course("flat"), Command(vx_mps=0.5))
+    plan = ctrl.plan
+    assert plan.converged
+    assert plan.n_qps < ctrl.mpc.config.j_max
+    step = plan.last_step
+    assert step.max_delta_pos_m <= 1e-5
+    assert step.max_delta_force_n <= 1e-2
+    assert step.max_delta_moment_nm <= 1e-3
+    assert plan.reference.all_reachable
+
+
+def test_plan_respects_contact_schedule_and_supports_weight(humanoid) -> None:
+    ctrl, state = _first_plan(humanoid, load_course("flat"), Command(vx_mps=0.5))
+    plan = ctrl.plan
+    f = plan.iterate.f  # (h, 2, 3)
+    for i, _ in enumerate(FEET):
+        swing = ~plan.contact[:, i]
+        np.testing.assert_allclose(f[swing, i], 0.0, atol=1e-6)
+        assert np.all(f[~swing, i, 2] >= 10.0 - 1e-6)
+    mean_fz = f[:, :, 2].sum(axis=1).mean()
+    assert mean_fz == pytest.approx(humanoid.total_mass_kg * 9.81, rel=0.2)
+    stance = FEET.index(ctrl.schedule.stance_foot)
+    np.testing.assert_allclose(
+        plan.iterate.p_foot[0, stance], state.foot_pos_world_m[FEET[stance]], atol=1e-9
+    )
+
+
+def test_foothold_bounds_of_eq24_move_the_touchdown_across_a_gap(humanoid) -> None:
+    """Standing 0.05 m before a gap edge, the swing foot's touchdown is bounded to a patch."""
+    course = load_course("gap", width_m=0.2, x_m=0.12)
+    ctrl, _ = _first_plan(humanoid, course, Command(vx_mps=0.5))
+    swing = ctrl.schedule.swing_foot
+    td = ctrl.plan.touchdown(swing)
+    assert course.foot_allowed(td[0], td[1], swing)
+
+
+@pytest.mark.slow
+def test_kd_walks_over_a_small_gap(humanoid) -> None:
+    """Closed loop: 0.10 m gap at x = 0.8 m, 0.5 m/s, 3.5 s: crosses, no fall, no bad foothold."""
+    course = load_course("gap", width_m=0.10, x_m=0.8)
+    sim = Simulator(humanoid, course)
+    command = Command(vx_mps=0.5)
+    ctrl = KDWalkController(humanoid, course, command)
+    summary = run_episode(sim, ctrl, command, 3.5, progress=False)
+    assert not summary["fell"]
+    assert summary["foothold_violations"] == 0
+    assert summary["distance_m"] > 1.1  # past the gap's far edge (0.9 m) by a margin
+    assert any(f["pos_m"][0] > 0.95 for f in summary["footholds"])
+    assert summary["mpc"]["converged_fraction"] > 0.9
