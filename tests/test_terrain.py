@@ -464,3 +464,30 @@ def test_geom_colours_follow_feet() -> None:
 def test_course_bounds() -> None:
     assert course_bounds(load_course("flat")) == (-1.0, 25.0, -1.5, 1.5)
     assert course_bounds(Course.from_dict(_valid_dict())) == (-1.0, 5.0, -0.5, 0.5)
+
+
+def test_reachable_foothold_bounds_prefers_the_patch_the_leg_can_reach() -> None:
+    """CoM at touchdown 0.02 m before a 0.20 m gap: the far side is out of reach (0.12 m),
+    so the near patch is chosen even though the nominal foothold lies over the gap."""
+    course = load_course("gap", width_m=0.2, x_m=1.5)
+    lo, hi, patch = course.reachable_foothold_bounds(
+        (1.48, 0.0), "left", (1.56, 0.06), reach_x_m=0.12, margin_m=0.03
+    )
+    assert patch == course.patch_at(1.0, 0.0)
+    assert hi[0] == pytest.approx(1.47)
+    # CoM at touchdown over the middle of the gap: only the far side is within reach.
+    lo, hi, patch = course.reachable_foothold_bounds(
+        (1.65, 0.0), "left", (1.70, 0.06), reach_x_m=0.12, margin_m=0.03
+    )
+    assert patch == course.patch_at(2.0, 0.0)
+    assert lo[0] == pytest.approx(1.73)
+
+
+def test_reachable_foothold_bounds_respect_the_foot_of_a_patch() -> None:
+    course = load_course("stepping-stones")
+    for foot in ("left", "right"):
+        for x in np.linspace(0.9, 3.2, 12):
+            lo, hi, patch = course.reachable_foothold_bounds((x, 0.0), foot, (x + 0.08, 0.0))
+            assert patch is not None
+            assert course.patches[patch].allows(foot)
+            assert np.all(lo <= hi)

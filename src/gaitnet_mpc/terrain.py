@@ -601,10 +601,11 @@ class Course:
 
         The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
         (the hip is above it). Among the patches that allow ``foot``, each shrunk by
-        ``margin_m``, those whose box meets that window are candidates; the one closest to
-        the nominal foothold ``p_nominal_xy`` wins and the bounds are its box cut to the
-        window. If no patch meets the window, the patch closest to the window is used (the
-        foot will land short or long of it, and the MPC should see the bound anyway).
+        ``margin_m``, those whose box meets that window are candidates; the one whose part
+        inside the window is closest to the nominal foothold ``p_nominal_xy`` wins, and the
+        bounds are its whole shrunk box (the window only chooses the patch; the MPC keeps
+        the freedom to step beyond it). If no patch meets the window, the patch closest to
+        the window is used.
 
         Returns:
             ``(p_min (3,), p_max (3,), patch index or None)``; z bounds are the patch top.
@@ -626,7 +627,7 @@ class Course:
                 dy = max(box[2] - yn, 0.0, yn - box[3])
                 score = dx * dx + dy * dy
                 if best is None or score < best[0]:
-                    best = (score, i, box)
+                    best = (score, i, (x_lo, x_hi, y_lo, y_hi))
             else:
                 gap = _rect_distance(xc, yc, x_lo, x_hi, y_lo, y_hi)
                 if fallback is None or gap < fallback[0]:
