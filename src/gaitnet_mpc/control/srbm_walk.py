@@ -6,7 +6,7 @@ swing trajectory; every ``replan_period_s`` (and at each step start or touchdown
 SRBM MPC over the next two steps; send the first stage's stance wrenches and the swing
 target to the low-level controller.
 
-Design notes (the reasons behind the settings of :class:`SRBMWalkConfig`):
+Design notes (each setting of :class:`SRBMWalkConfig` says why it has its value):
 
 * **Footholds from the linear inverted pendulum (LIP).** With line feet and no ankle roll,
   the stance foot cannot exert a moment about its long axis, so sideways the robot is a
@@ -19,17 +19,25 @@ Design notes (the reasons behind the settings of :class:`SRBMWalkConfig`):
   stance half-width ``d``: ``hip_lateral_offset = d (1 - tanh^2(omega T / 2)) / 2``. With
   the geometric hip offset (0.065 m) instead, the same law converges to a 0.2 m half-width
   with +-0.4 m/s of lateral sway, which made the robot trip over its own feet at 1 m/s.
+  Footholds are also limited to the leg's reach from the predicted CoM.
+* **The MPC leaves the lateral CoM to the footholds** (small lateral weights in the
+  heading frame, see :class:`SRBMConfig`); tracking vy = 0 made it lean and drift sideways.
 * **Measured touchdown.** A swing foot that touches the ground in the second half of its
   swing is switched to stance at once: the MPC gets it as a second contact for the rest of
   the step (double support) and the low-level controller maps its wrench through ``J^T``
   instead of pressing it into the ground with the swing PD. Scheduled touchdowns are
   slightly early by design (the swing ends 5 mm below the ground at 0.3 m/s), so without
-  this every step began with an uncontrolled braking impulse.
+  this every step began with an uncontrolled braking impulse. (Waiting for a late foot is
+  implemented but off, see ``late_touchdown_timeout_s``.)
+* **Swing overshoot compensation.** The measured touchdown error of the PD-tracked swing
+  foot is averaged and subtracted from later swing targets.
+* **Bent-knee walking height and stance-leg gravity feedforward**, so the knee never locks
+  straight and the ground reaction equals the MPC's wrench.
 * **Commanded path with anti-windup.** The CoM path is the integral of the (ramped) velocity
   command along the commanded heading, integrated every tick so turning is exact. It is kept
   within ``path_max_error_m`` of the CoM (anti-windup), so after a push the robot resumes
-  the commanded velocity instead of walking back to where it was.
-* **Wrench regularised about m g** (see :class:`SRBMConfig`), which removes the CoM sag.
+  the commanded velocity instead of walking back to where it was. The measured yaw is
+  unwrapped around the commanded heading (turns past pi).
 """
 
 from __future__ import annotations
@@ -57,6 +65,9 @@ from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, NX, SRBMMPC, SRBMConfig
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
 from gaitnet_mpc.terrain import Course
+
+#: A late foot is lowered towards this depth below the ground [m] until it touches down.
+LATE_DEPTH_M = 0.03
 
 
 @dataclass(frozen=True)
@@ -87,6 +98,18 @@ class SRBMWalkConfig:
     # it is what catching a 10 N s sideways push needs (0.30 m was not enough).
     max_lateral_separation_m: float = 0.40
     early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
+    # Late touchdown: if the landing foot is still in the air when its stance begins, the
+    # other foot keeps standing (and carries the MPC wrench) while the landing foot keeps
+    # descending, for at most this long; then the other foot swings in the time left.
+    # Off by default: with 0.09 s (or 0.03 s) a backward push of 56 N x 0.2 s, survived
+    # without it, ended in a sideways fall - the compressed swing that follows lands
+    # short sideways. With the fixed step time, stepping on schedule works better here.
+    late_touchdown_timeout_s: float = 0.0
+    min_swing_s: float = 0.08  # a shorter swing is skipped (the foot stays down)
+    # Forward/backward reach of a foothold from the CoM predicted at touchdown (heading
+    # frame): about the hip's reach with the knee still bent at walking height. A foothold
+    # beyond it is not reached; the foot then lands late and short of the plan.
+    max_reach_m: float = 0.20
     # Swing-tracking bias compensation: the joint-PD swing leg (no inertial feedforward)
     # lands the foot 3 cm (0.5 m/s) to 5 cm (1 m/s) beyond its target, which puts the
     # stance foot ahead of where the LIP law wants it and costs ~10 % of the speed. The
@@ -132,10 +155,10 @@ def lip_gains(z0_m: float, step_s: float, half_width_m: float) -> tuple[float, f
     k_v = 1.0 / (omega * math.tanh(x)) - 0.5 * step_s
     t = math.tanh(0.5 * x)
     # Walking at mean speed v on the LIP, the CoM is fastest at touchdown:
-    # v_td = v (x/2) coth(x/2). The heuristic's fixed point equals that orbit (foothold
-    # v T / 2 ahead of the CoM) when its velocity command is scaled by
-    # kappa + (kappa - 1) T / (2 k_v); with the plain command the gait settles about 10 %
-    # slower than commanded.
+    # v_td = v (x/2) coth(x/2) (8 % above v here). The heuristic's fixed point is that
+    # orbit (foothold v T / 2 ahead of the CoM) when its velocity command is scaled by
+    # kappa + (kappa - 1) T / (2 k_v); with the plain command its fixed point is an orbit
+    # about 10 % slower than commanded, which the MPC then has to make up with the CoP.
     kappa = 0.5 * x / math.tanh(0.5 * x)
     cmd_scale = kappa + (kappa - 1.0) * step_s / (2.0 * k_v)
     return omega, k_v, half_width_m * (1.0 - t * t) / 2.0, cmd_scale
@@ -203,8 +226,10 @@ class SRBMWalkController(Controller):
         self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
         self.foothold = dict(self.foot_pos)
         self.swing: SwingTrajectory | None = None
-        self.landed = False
-        self.bias_measured = True
+        self.landed = False  # the swing foot touched down early (stance for the rest)
+        self.late = False  # the stance foot has not touched down yet (the other stands)
+        self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
+        self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
         self.land_bias = np.zeros(2)  # (forward, outward) swing overshoot [m]
         self.step_seen = -1
         self.wrench: np.ndarray | None = None
@@ -337,6 +362,12 @@ class SRBMWalkController(Controller):
             yaw_rad=yaw,
             cmd_yaw_rate_radps=self.command.yaw_rate_radps,
         )
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        dx, dy = p[:2] - p_td_xy
+        fwd = c * dx + s_ * dy
+        lim = self.config.max_reach_m
+        if abs(fwd) > lim:
+            p[:2] -= (fwd - np.clip(fwd, -lim, lim)) * np.array([c, s_])
         p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m - self.config.touchdown_depth_m
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]
@@ -362,13 +393,14 @@ class SRBMWalkController(Controller):
         )
 
     def _measure_landing(self, state: RobotState, foot: str) -> None:
-        """Update the swing overshoot estimate with ``foot``'s touchdown point."""
-        if self.bias_measured or self.swing is None:
+        """Update the swing overshoot estimate with ``foot``'s touchdown point (once per
+        swing; ``self.aim[foot]`` is where its swing was aimed)."""
+        aim = self.aim.pop(foot, None)
+        if aim is None:
             return
-        self.bias_measured = True
         yaw = self._heading_cmd(state.t_s)
         c, s_ = np.cos(yaw), np.sin(yaw)
-        ex, ey = state.foot_pos_world_m[foot][:2] - self.swing.p1_world_m[:2]
+        ex, ey = state.foot_pos_world_m[foot][:2] - aim[:2]
         side = 1.0 if foot == "left" else -1.0
         err = np.array([c * ex + s_ * ey, side * (-s_ * ex + c * ey)])
         if self.robot.spec.planar:
@@ -386,29 +418,55 @@ class SRBMWalkController(Controller):
         target[:2] -= np.array([c * fwd - s_ * out, s_ * fwd + c * out])
         return target
 
+    def _start_swing(self, state: RobotState) -> None:
+        """Plan the swing foot's foothold and a swing over the time left in the step."""
+        sched = self.schedule
+        foot = sched.swing_foot
+        t_left = sched.time_left_in_step_s
+        self.next_replan_s = -np.inf
+        if t_left < self.config.min_swing_s:  # too late to step: stay down this step
+            self.swing = None
+            self.landed = True
+            self.foothold[foot] = state.foot_pos_world_m[foot].copy()
+            return
+        foothold = self._plan_swing_foothold(state, t_left)
+        self.foothold[foot] = foothold
+        target = self._swing_target(foot, foothold, state.t_s + t_left)
+        p0 = state.foot_pos_world_m[foot]
+        obstacles = self.course.obstacles_between(min(p0[0], target[0]), max(p0[0], target[0]))
+        self.swing = self.config.swing.trajectory(
+            p0, target, t_left, [(o.x_min, o.x_max, o.z_top_m) for o in obstacles]
+        )
+        self.swing_t0_s = sched.time_in_step_s
+        self.aim[foot] = target
+
     def _on_step_start(self, state: RobotState) -> None:
         sched = self.schedule
-        if sched.step_index > 0:
-            self._measure_landing(state, sched.stance_foot)  # it never touched down early
+        stance = sched.stance_foot
         self._steps.append(sched.current_step_duration_s)
-        swing_foot = sched.swing_foot
         self.landed = False
-        self.bias_measured = False
-        self.foot_pos[sched.stance_foot] = state.foot_pos_world_m[sched.stance_foot].copy()
-        foothold = self._plan_swing_foothold(state, sched.current_step_duration_s)
-        self.foothold[swing_foot] = foothold
-        target = self._swing_target(swing_foot, foothold, state.t_s + sched.time_left_in_step_s)
-        obstacles = self.course.obstacles_between(
-            min(state.foot_pos_world_m[swing_foot][0], target[0]),
-            max(state.foot_pos_world_m[swing_foot][0], target[0]),
-        )
-        self.swing = self.config.swing.trajectory(
-            state.foot_pos_world_m[swing_foot],
-            target,
-            sched.current_step_duration_s,
-            [(o.x_min, o.x_max, o.z_top_m) for o in obstacles],
-        )
-        self.next_replan_s = -np.inf
+        self.late = sched.step_index > 0 and not state.foot_contact[stance]
+        self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
+        if self.late:
+            # Keep the other foot down until this one lands (see ``_end_late``).
+            self.swing = None
+            aim = self.aim.get(stance, state.foot_pos_world_m[stance])
+            self.late_xy = aim[:2].copy()  # where its swing was aimed
+            self.foothold[sched.swing_foot] = state.foot_pos_world_m[sched.swing_foot].copy()
+            self.next_replan_s = -np.inf
+            return
+        if sched.step_index > 0:
+            self._measure_landing(state, stance)  # it did not touch down early
+        self._start_swing(state)
+
+    def _end_late(self, state: RobotState) -> None:
+        """The late foot landed (or the wait timed out): the other foot now swings."""
+        self.late = False
+        stance = self.schedule.stance_foot
+        if state.foot_contact[stance]:
+            self._measure_landing(state, stance)
+            self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
+        self._start_swing(state)
 
     def _update_foothold(self, state: RobotState) -> None:
         """Re-plan the swing foot's foothold with the current CoM state (until the last
@@ -423,8 +481,9 @@ class SRBMWalkController(Controller):
         foot = sched.swing_foot
         foothold = self._plan_swing_foothold(state, sched.time_left_in_step_s)
         target = self._swing_target(foot, foothold, state.t_s + sched.time_left_in_step_s)
-        if self.swing.retarget(target, sched.time_in_step_s):
+        if self.swing.retarget(target, sched.time_in_step_s - self.swing_t0_s):
             self.foothold[foot] = foothold
+            self.aim[foot] = target
 
     def _torque_limits(
         self, state: RobotState, feet: list[tuple[int, np.ndarray]]
@@ -458,9 +517,14 @@ class SRBMWalkController(Controller):
         next_dt = sched.next_step_dt_s or sched.current_step_dt_s
         t_next = sched.config.stages_per_step * next_dt
         p_st = self._stance_pos(state, stance_now)
+        now = np.arange(h) == 0  # the rest of the current stage
         if self.landed:  # the swing foot stands where it touched down
             p_sw = self._stance_pos(state, swing_now)
             contact[steps == 0, i_sw] = True
+        elif self.late:  # the stance foot is still in the air, the other one stands
+            p_sw = self._stance_pos(state, swing_now)
+            contact[now, i_sw] = True
+            contact[now, i_st] = False
         else:
             p_sw = self.foothold[swing_now]
         # The stance foot lands again (step 2) where the heuristic puts it for the CoM
@@ -480,10 +544,13 @@ class SRBMWalkController(Controller):
         # commanded heading its swing is steered to.
         yaw = np.full((h, 2), self._heading_cmd(state.t_s))
         yaw[steps == 0, i_st] = state.foot_yaw_rad[stance_now]
-        if self.landed:
+        if self.landed or self.late:
             yaw[steps <= 1, i_sw] = state.foot_yaw_rad[swing_now]
         t0 = time.perf_counter()
-        feet = [(i_st, steps == 0)] + ([(i_sw, steps == 0)] if self.landed else [])
+        if self.late:
+            feet = [(i_sw, now)]
+        else:
+            feet = [(i_st, steps == 0)] + ([(i_sw, steps == 0)] if self.landed else [])
         limits = self._torque_limits(state, feet)
         try:
             plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw, limits)
@@ -501,8 +568,14 @@ class SRBMWalkController(Controller):
             self.step_seen = sched.step_index
             self._on_step_start(state)
         self._update_path(state)
-        swing = sched.swing_foot
-        if (
+        swing, stance = sched.swing_foot, sched.stance_foot
+        if self.late:
+            if (
+                state.foot_contact[stance]
+                or sched.time_in_step_s >= self.config.late_touchdown_timeout_s
+            ):
+                self._end_late(state)
+        elif (
             not self.landed
             and sched.phase_in_step >= self.config.early_touchdown_phase
             and state.foot_contact[swing]
@@ -515,15 +588,21 @@ class SRBMWalkController(Controller):
             self._update_foothold(state)
             self._replan(state)
             self.next_replan_s = state.t_s + self.config.replan_period_s
-        stance = sched.stance_foot
         wrench = {}
         if self.wrench is not None:
-            wrench[stance] = self.wrench[FEET.index(stance)]
-            if self.landed:
+            if self.late:
                 wrench[swing] = self.wrench[FEET.index(swing)]
+            else:
+                wrench[stance] = self.wrench[FEET.index(stance)]
+                if self.landed:
+                    wrench[swing] = self.wrench[FEET.index(swing)]
         target = {}
-        if not self.landed:
-            t_swing = sched.time_in_step_s
+        if self.late:  # keep lowering the late foot straight down until it lands
+            z = self.ground_z + self.robot.spec.foot_contact_radius_m - LATE_DEPTH_M
+            v = np.array([0.0, 0.0, -self.config.swing.touchdown_speed_mps])
+            target[stance] = (np.array([*self.late_xy, z]), v)
+        elif not self.landed and self.swing is not None:
+            t_swing = sched.time_in_step_s - self.swing_t0_s
             target[swing] = (self.swing.position(t_swing), self.swing.velocity(t_swing))
         yaw = None if self.robot.spec.planar else self._heading_cmd(state.t_s)
         tau = self.low.torques(state, wrench, target, yaw)
