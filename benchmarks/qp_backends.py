@@ -161,7 +161,11 @@ class Variant:
         ws = self.workspace
         assert ws is not None
         if self.warm:
-            sol = ws.solve(problem, warm_start=self.last_x)
+            # The SRBM QP drops a swinging foot's variables, so its size changes with the
+            # contact schedule; like the controller, warm-start only when sizes match.
+            last = self.last_x
+            guess = last if last is not None and last.shape == (problem.n,) else None
+            sol = ws.solve(problem, warm_start=guess)
             if sol.found:  # the controller keeps its last good solution otherwise
                 self.last_x = sol.x
         else:
