@@ -24,15 +24,9 @@ from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.control.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.control.stance import StanceMap
 from gaitnet_mpc.mpc.qp import QPProblem, make_workspace
+from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, skew
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
-
-GRAVITY_MPS2 = 9.81
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrix: ``skew(a) @ b == np.cross(a, b)``."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass(frozen=True)

@@ -107,12 +107,11 @@ import scipy.sparse as sp
 from gaitnet_mpc.control.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, QPWorkspace, make_workspace
-from gaitnet_mpc.mpc.srbm import skew
+from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, skew
 from gaitnet_mpc.robots.spec import FEET
 
 NX = 12  # [H (6); l_G (3); k_G (3)]
 N_FEET = 2
-GRAVITY_MPS2 = 9.81
 _NU_STAGE = 3 + 3 * 3 * N_FEET  # dpc (3) + df, dtau, dpf per foot = 21
 _NS = NX + _NU_STAGE  # variables per stage block = 33
 #: Bound of a "free" foot tie row [m]: finite so that no row has two infinite bounds (PIQP

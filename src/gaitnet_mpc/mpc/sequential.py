@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -194,21 +194,16 @@ class SequentialKDMPC:
             footholds,
             p_foot_now_m=p_foot_now_m,
             p_liftoff_m=p_liftoff_m,
-            workspace=self.ref_workspace,
-        )
-        pose0_ref = angular_pose_kgm2(robot, self.pin_data, ref.q_ref[0], yaw_cmd)
-        ref = make_reference(
-            robot,
-            q,
-            timing,
-            command,
-            footholds,
-            p_foot_now_m=p_foot_now_m,
-            p_liftoff_m=p_liftoff_m,
             p_com_start_m=p_com_start_m,
-            pose0_angular_kgm2=pose0_ref,
             workspace=self.ref_workspace,
         )
+        # The reference's angular pose starts at 0; H_ref's angular part is additive in its
+        # start value (eq. 30 and the Riemann sum alike), so shift it to the same map of
+        # q_ref[0] instead of building the reference a second time.
+        pose0_ref = angular_pose_kgm2(robot, self.pin_data, ref.q_ref[0], yaw_cmd)
+        H_ref = ref.H_ref.copy()
+        H_ref[:, 3:] += pose0_ref - ref.pose0_angular_kgm2
+        ref = replace(ref, H_ref=H_ref, pose0_angular_kgm2=pose0_ref)
         h0 = f_j2m(robot.pin_model, self.pin_data, q, v)
         com0 = np.array(self.pin_data.com[0])
         x0 = np.concatenate([mass * com0, pose0_meas, h0])
