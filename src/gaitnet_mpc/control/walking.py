@@ -1,0 +1,511 @@
+"""Walking on a periodic gait: the parts every walking controller shares.
+
+Per control tick (1 kHz): advance the gait schedule; at each step start, plan the swing
+foot's foothold (Raibert heuristic evaluated at the LIP-predicted touchdown state) and its
+swing trajectory; every ``replan_period_s`` (and at each step start or touchdown) run the
+subclass's MPC (:meth:`WalkingController._replan`); send the stance wrenches of the plan
+and the swing target to the low-level controller. ``srbm`` is built on it. ``kd`` is not
+yet: on this base with the sub-problem's weights its footholds drift toward the CoM line
+(see ``control/kd_walk.py`` and the notes of issue 5).
+
+Design notes (each setting of :class:`WalkingConfig` says why it has its value):
+
+* **Footholds from the linear inverted pendulum (LIP).** With line feet and no ankle roll,
+  the stance foot cannot exert a moment about its long axis, so sideways the robot is a
+  point-foot pendulum that only foot placement stabilises. The Raibert law
+  ``p = p_hip + v T/2 + k_v (v - v_cmd)`` is evaluated with the CoM position and velocity
+  *predicted at touchdown* by the LIP about the stance foot (closed form, ``omega =
+  sqrt(g / z0)``), not with the current ones. Its gain is the LIP deadbeat gain
+  ``T/2 + k_v = coth(omega T) / omega`` (one step cancels a velocity error), and its lateral
+  offset is chosen so that the heuristic's fixed point is the period-2 sway orbit of a
+  stance half-width ``d``: ``hip_lateral_offset = d (1 - tanh^2(omega T / 2)) / 2``. With
+  the geometric hip offset (0.065 m) instead, the same law converges to a 0.2 m half-width
+  with +-0.4 m/s of lateral sway, which made the robot trip over its own feet at 1 m/s.
+  Footholds are also limited to the leg's reach from the predicted CoM.
+* **The MPC leaves the lateral CoM to the footholds** (``srbm``: small lateral weights in
+  the heading frame, see :class:`SRBMConfig`); tracking vy = 0 made it lean and drift
+  sideways.
+* **Measured touchdown.** A swing foot that touches the ground in the second half of its
+  swing is switched to stance at once: the MPC gets it as a second contact for the rest of
+  the step (double support) and the low-level controller maps its wrench through ``J^T``
+  instead of pressing it into the ground with the swing PD. Scheduled touchdowns are
+  slightly early by design (the swing ends 5 mm below the ground at 0.3 m/s), so without
+  this every step began with an uncontrolled braking impulse. (Waiting for a late foot is
+  implemented but off, see ``late_touchdown_timeout_s``.)
+* **Swing overshoot compensation.** The measured touchdown error of the PD-tracked swing
+  foot is averaged and subtracted from later swing targets.
+* **Bent-knee walking height and stance-leg gravity feedforward**, so the knee never locks
+  straight and the ground reaction equals the MPC's wrench.
+* **Commanded path with anti-windup.** The CoM path is the integral of the (ramped) velocity
+  command along the commanded heading, integrated every tick so turning is exact. It is kept
+  within ``path_max_error_m`` of the CoM (anti-windup), so after a push the robot resumes
+  the commanded velocity instead of walking back to where it was. The measured yaw is
+"""
+
+from __future__ import annotations
+
+import math
+from abc import abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from gaitnet_mpc.control.base import Controller, MPCStats
+from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.gait import (
+    GaitSchedule,
+    GaitScheduleConfig,
+    RaibertConfig,
+    RaibertHeuristic,
+    SwingConfig,
+    SwingTrajectory,
+)
+from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
+from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.terrain import Course
+
+#: A late foot is lowered towards this depth below the ground [m] until it touches down.
+LATE_DEPTH_M = 0.03
+
+
+@dataclass(frozen=True)
+class WalkingConfig:
+    """Settings shared by the walking controllers (gait, footholds, swing, low level)."""
+
+    dt_s: float = 0.045  # MPC stage = 1/5 of a step (step 0.225 s)
+    replan_period_s: float = 0.01
+    com_height_m: float | None = None  # walking CoM height; default: reset height + offset
+    # Walk with bent knees: at the standing height (knee 0.7 rad) a leg reaching 0.12 m
+    # or more ahead at touchdown is nearly straight; the knee then locks at its limit,
+    # carries the load with no torque and vaults the CoM up, so the MPC loses control of
+    # the height and the swing leg cannot reach its foothold. 3 cm lower bends the knee
+    # to about 1.0 rad (knee torque for m g about 18 N m of the 67 N m available).
+    com_height_offset_m: float = -0.03
+    com_height_ramp_s: float = 0.5  # the height reference moves there over this time
+    max_pos_error_m: float = 0.05  # clamp of the position-tracking error in the reference
+    path_max_error_m: float = 0.10  # anti-windup: the commanded path stays this close
+    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
+    path_gain_per_s: float = 1.0  # CoM path error -> velocity added to the foothold command
+    max_path_feedback_mps: float = 0.2  # bound of that added velocity
+    retarget_stop_fraction: float = 0.8  # footholds are frozen in the last 20 % of a swing
+    stance_half_width_m: float = 0.07  # lateral CoM-to-foot distance of the sway orbit
+    max_step_m: float = 0.35  # forward/backward foothold limit from the stance foot
+    min_lateral_separation_m: float = 0.08  # feet never closer sideways (legs collide)
+    # Widest step sideways from the stance foot. The hip roll reaches 0.6 rad outward, about
+    # 0.22 m beside the hip at walking height, so 0.40 m between the feet is reachable;
+    # it is what catching a 10 N s sideways push needs (0.30 m was not enough).
+    max_lateral_separation_m: float = 0.40
+    early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
+    # Late touchdown: if the landing foot is still in the air when its stance begins, the
+    # other foot keeps standing (and carries the MPC wrench) while the landing foot keeps
+    # descending, for at most this long; then the other foot swings in the time left.
+    # Off by default: with 0.09 s (or 0.03 s) a backward push of 56 N x 0.2 s, survived
+    # without it, ended in a sideways fall - the compressed swing that follows lands
+    # short sideways. With the fixed step time, stepping on schedule works better here.
+    late_touchdown_timeout_s: float = 0.0
+    min_swing_s: float = 0.08  # a shorter swing is skipped (the foot stays down)
+    # Forward/backward reach of a foothold from the CoM predicted at touchdown (heading
+    # frame): about the hip's reach with the knee still bent at walking height. A foothold
+    # beyond it is not reached; the foot then lands late and short of the plan.
+    max_reach_m: float = 0.20
+    # Swing-tracking bias compensation: the joint-PD swing leg (no inertial feedforward)
+    # lands the foot 3 cm (0.5 m/s) to 5 cm (1 m/s) beyond its target, which puts the
+    # stance foot ahead of where the LIP law wants it and costs ~10 % of the speed. The
+    # overshoot (touchdown point minus swing target, heading frame, lateral outward) is
+    # averaged over steps and subtracted from later swing targets; the MPC and the LIP
+    # keep using the intended foothold.
+    landing_bias_gain: float = 0.3  # per-step weight of the new measurement
+    landing_bias_max_m: float = 0.06
+    # Stance legs get tau = [g(q) - J^T lambda]_leg (control/stance.py with qdd = 0) rather
+    # than -J^T lambda alone: without the leg's own gravity torques the ground reaction
+    # exceeds the MPC's wrench by about 12 N (the weight of the lower leg pushing on the
+    # foot), so the CoM stood 1.5 cm above its reference while the MPC kept asking for less
+    # force. Set False if the low-level controller compensates stance-leg gravity itself.
+    stance_gravity_ff: bool = True
+    low_level: LowLevelConfig = field(default_factory=LowLevelConfig)
+    swing: SwingConfig = field(
+        default_factory=lambda: SwingConfig(touchdown_speed_mps=0.3, foot_half_length_m=0.075)
+    )
+    touchdown_depth_m: float = 0.005  # swing targets end this far below the ground
+
+
+def lip_gains(z0_m: float, step_s: float, half_width_m: float) -> tuple[float, float, float, float]:
+    """LIP foothold gains for CoM height ``z0_m`` and step (stance) time ``step_s``.
+
+    Returns ``(omega, k_v, lateral_offset, cmd_scale)``: the LIP frequency [1/s], the
+    Raibert velocity gain ``k_v = coth(omega T)/omega - T/2`` [s] (deadbeat: after one
+    stance of ``T`` on the new foot, a velocity error is cancelled), the heuristic's lateral
+    offset [m] whose fixed point is the symmetric sway orbit with the feet ``half_width_m``
+    beside the CoM (orbit touchdown speed ``V = omega d tanh(omega T / 2)``) and the factor
+    applied to the velocity command inside the heuristic [-] (see below).
+    """
+    omega = math.sqrt(GRAVITY_MPS2 / z0_m)
+    x = omega * step_s
+    k_v = 1.0 / (omega * math.tanh(x)) - 0.5 * step_s
+    t = math.tanh(0.5 * x)
+    # Walking at mean speed v on the LIP, the CoM is fastest at touchdown:
+    # v_td = v (x/2) coth(x/2) (8 % above v here). The heuristic's fixed point is that
+    # orbit (foothold v T / 2 ahead of the CoM) when its velocity command is scaled by
+    # kappa + (kappa - 1) T / (2 k_v); with the plain command its fixed point is an orbit
+    # about 10 % slower than commanded, which the MPC then has to make up with the CoP.
+    kappa = 0.5 * x / math.tanh(0.5 * x)
+    cmd_scale = kappa + (kappa - 1.0) * step_s / (2.0 * k_v)
+    return omega, k_v, half_width_m * (1.0 - t * t) / 2.0, cmd_scale
+
+
+class WalkingController(Controller):
+    """Gait schedule + LIP/Raibert footholds + swing + low-level control around an MPC.
+
+    Subclasses build their MPC, implement :meth:`_replan` (which sets the stance wrenches
+    returned by :meth:`_wrenches_now`) and may override :meth:`_step_dt` (the sampling
+    time of a step that starts) and :meth:`_update_foothold`.
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        course: Course,
+        command: object,
+        config: WalkingConfig,
+    ) -> None:
+        self.robot = robot
+        self.course = course
+        self.command = command
+        self.config = config
+        self.low = LowLevelController(robot, config.low_level)
+        self._pin_data = robot.pin_model.createData()
+        self.schedule = GaitSchedule(GaitScheduleConfig(default_dt_s=config.dt_s))
+        self._stats = MPCStats()
+        self._steps: list[float] = []
+
+    # --------------------------------------------------------------- episode
+    def reset(self, state: RobotState) -> None:
+        c = self.config
+        self.schedule.reset(state.t_s)
+        self.t0_s = state.t_s
+        self.t_prev_s = state.t_s
+        self.com0 = state.com_world_m.copy()
+        self.path_xy = state.com_world_m[:2].copy()
+        self.yaw0 = float(state.base_rpy_rad[2])
+        self.z_start = float(state.com_world_m[2])
+        self.z_walk = c.com_height_m or self.z_start + c.com_height_offset_m
+        self.ground_z = float(min(p[2] for p in state.foot_pos_world_m.values()))
+        self.ground_z -= self.robot.spec.foot_contact_radius_m
+        self._set_step_time(self.schedule.config.stages_per_step * c.dt_s)
+        self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
+        self.foothold = dict(self.foot_pos)
+        self.swing: SwingTrajectory | None = None
+        self.landed = False  # the swing foot touched down early (stance for the rest)
+        self.late = False  # the stance foot has not touched down yet (the other stands)
+        self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
+        self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
+        self.land_bias = np.zeros(2)  # (forward, outward) swing overshoot [m]
+        self.step_seen = -1
+        self.next_replan_s = -np.inf
+
+    def _set_step_time(self, step_s: float) -> None:
+        """LIP gains and the Raibert heuristic for steps lasting ``step_s`` [s]."""
+        c = self.config
+        planar = self.robot.spec.planar
+        self.step_time_s = step_s
+        self.omega, k_v, lateral, self.cmd_scale = lip_gains(
+            self.z_walk - self.ground_z, step_s, c.stance_half_width_m
+        )
+        self.raibert = RaibertHeuristic(
+            RaibertConfig(
+                hip_lateral_offset_m=0.0 if planar else lateral,
+                velocity_gain_s=k_v,
+                max_step_m=c.max_step_m,
+                min_lateral_separation_m=0.0 if planar else c.min_lateral_separation_m,
+                max_lateral_separation_m=0.0 if planar else c.max_lateral_separation_m,
+            )
+        )
+
+    @property
+    def mpc_stats(self) -> MPCStats:
+        return self._stats
+
+    @property
+    def step_durations_s(self) -> list[float]:
+        return self._steps
+
+    # ------------------------------------------------------------- helpers
+    def _ramp(self, t_s: float) -> float:
+        """Fraction of the command applied ``t_s`` after the start (acceleration limit)."""
+        v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
+        return min(1.0, max(t_s, 0.0) * self.config.max_accel_mps2 / v_max)
+
+    def _z_ref(self, t_s: float) -> float:
+        """CoM height reference at absolute time ``t_s`` (linear ramp from the start)."""
+        ramp_s = self.config.com_height_ramp_s
+        k = 1.0 if ramp_s <= 0.0 else min(1.0, max(t_s - self.t0_s, 0.0) / ramp_s)
+        return self.z_start + k * (self.z_walk - self.z_start)
+
+    def _heading_cmd(self, t_s: float) -> float:
+        """Commanded heading [rad] at time ``t_s``: initial yaw plus integrated yaw rate."""
+        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
+
+    def _cmd_world(self, yaw: float, t_s: float) -> np.ndarray:
+        """Commanded CoM velocity (3,) in the world at time ``t_s`` after the start."""
+        c, s = np.cos(yaw), np.sin(yaw)
+        k = self._ramp(t_s)
+        vx, vy = k * self.command.vx_mps, k * self.command.vy_mps
+        return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+
+    def _update_path(self, state: RobotState) -> None:
+        """Integrate the commanded path to ``state.t_s`` and apply the anti-windup clamp."""
+        dt = state.t_s - self.t_prev_s
+        self.t_prev_s = state.t_s
+        if dt > 0.0:
+            v = self._cmd_world(self._heading_cmd(state.t_s), state.t_s - self.t0_s)
+            self.path_xy += v[:2] * dt
+        err = self.path_xy - state.com_world_m[:2]
+        norm = float(np.linalg.norm(err))
+        if norm > self.config.path_max_error_m:
+            self.path_xy = state.com_world_m[:2] + err * (self.config.path_max_error_m / norm)
+
+    def _lip(
+        self, p_xy: np.ndarray, v_xy: np.ndarray, foot_xy: np.ndarray, t_s: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """CoM (position, velocity) in the plane after ``t_s`` on the LIP about ``foot_xy``."""
+        w = self.omega
+        ch, sh = math.cosh(w * t_s), math.sinh(w * t_s)
+        d = p_xy - foot_xy
+        return foot_xy + d * ch + v_xy * (sh / w), d * (w * sh) + v_xy * ch
+
+    def _path_feedback(self, state: RobotState, yaw: float) -> np.ndarray:
+        """Bounded velocity (heading frame) that steers the footholds back to the path."""
+        ex, ey = self.path_xy - state.com_world_m[:2]
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        err_heading = np.array([c * ex + s_ * ey, -s_ * ex + c * ey])
+        lim = self.config.max_path_feedback_mps
+        return np.clip(self.config.path_gain_per_s * err_heading, -lim, lim)
+
+    def _foothold(
+        self,
+        state: RobotState,
+        foot: str,
+        p_td_xy: np.ndarray,
+        v_td_xy: np.ndarray,
+        p_stance: np.ndarray,
+        t_td_s: float,
+        stance_s: float,
+    ) -> np.ndarray:
+        """Foothold (3,) of ``foot`` touching down at absolute time ``t_td_s`` with the CoM at
+        (``p_td_xy``, ``v_td_xy``); the foot on ``p_stance`` stands until then."""
+        yaw = self._heading_cmd(t_td_s)
+        ramp = self._ramp(t_td_s - self.t0_s)
+        cmd = ramp * self.cmd_scale * np.array([self.command.vx_mps, self.command.vy_mps])
+        p = self.raibert.foothold(
+            foot,
+            p_com_world_m=np.array([p_td_xy[0], p_td_xy[1], state.com_world_m[2]]),
+            v_com_world_mps=v_td_xy,
+            cmd_vel_mps=cmd + self._path_feedback(state, yaw),
+            stance_duration_s=stance_s,
+            time_to_touchdown_s=0.0,
+            p_stance_foot_world_m=p_stance,
+            ground_z_m=self.ground_z,
+            yaw_rad=yaw,
+            cmd_yaw_rate_radps=self.command.yaw_rate_radps,
+        )
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        dx, dy = p[:2] - p_td_xy
+        fwd = c * dx + s_ * dy
+        lim = self.config.max_reach_m
+        if abs(fwd) > lim:
+            p[:2] -= (fwd - np.clip(fwd, -lim, lim)) * np.array([c, s_])
+        p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m - self.config.touchdown_depth_m
+        if self.robot.spec.planar:
+            p[1] = state.foot_pos_world_m[foot][1]
+        return p
+
+    def _stance_pos(self, state: RobotState, foot: str) -> np.ndarray:
+        """Where ``foot`` stands: measured while in contact, else the last stored position."""
+        if state.foot_contact[foot]:
+            self.foot_pos[foot] = state.foot_pos_world_m[foot].copy()
+        return self.foot_pos[foot]
+
+    def _plan_swing_foothold(self, state: RobotState, t_left_s: float) -> np.ndarray:
+        """Foothold of the current swing foot: Raibert at the LIP-predicted touchdown."""
+        sched = self.schedule
+        p_st = self._stance_pos(state, sched.stance_foot)
+        p_td, v_td = self._lip(
+            state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], t_left_s
+        )
+        next_dt = sched.next_step_dt_s or sched.current_step_dt_s
+        stance_s = sched.config.stages_per_step * next_dt
+        return self._foothold(
+            state, sched.swing_foot, p_td, v_td, p_st, state.t_s + t_left_s, stance_s
+        )
+
+    def _measure_landing(self, state: RobotState, foot: str) -> None:
+        """Update the swing overshoot estimate with ``foot``'s touchdown point (once per
+        swing; ``self.aim[foot]`` is where its swing was aimed)."""
+        aim = self.aim.pop(foot, None)
+        if aim is None:
+            return
+        yaw = self._heading_cmd(state.t_s)
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        ex, ey = state.foot_pos_world_m[foot][:2] - aim[:2]
+        side = 1.0 if foot == "left" else -1.0
+        err = np.array([c * ex + s_ * ey, side * (-s_ * ex + c * ey)])
+        if self.robot.spec.planar:
+            err[1] = 0.0  # the planar model's feet cannot move sideways
+        k, lim = self.config.landing_bias_gain, self.config.landing_bias_max_m
+        self.land_bias = np.clip(self.land_bias + k * (err - self.land_bias), -lim, lim)
+
+    def _swing_target(self, foot: str, foothold: np.ndarray, t_s: float) -> np.ndarray:
+        """Where to aim the swing foot so that it lands on ``foothold`` (bias removed)."""
+        yaw = self._heading_cmd(t_s)
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        side = 1.0 if foot == "left" else -1.0
+        fwd, out = self.land_bias[0], side * self.land_bias[1]
+        target = foothold.copy()
+        target[:2] -= np.array([c * fwd - s_ * out, s_ * fwd + c * out])
+        return target
+
+    def _start_swing(self, state: RobotState) -> None:
+        """Plan the swing foot's foothold and a swing over the time left in the step."""
+        sched = self.schedule
+        foot = sched.swing_foot
+        t_left = sched.time_left_in_step_s
+        self.next_replan_s = -np.inf
+        if t_left < self.config.min_swing_s:  # too late to step: stay down this step
+            self.swing = None
+            self.landed = True
+            self.foothold[foot] = state.foot_pos_world_m[foot].copy()
+            return
+        foothold = self._plan_swing_foothold(state, t_left)
+        self.foothold[foot] = foothold
+        target = self._swing_target(foot, foothold, state.t_s + t_left)
+        p0 = state.foot_pos_world_m[foot]
+        obstacles = self.course.obstacles_between(min(p0[0], target[0]), max(p0[0], target[0]))
+        self.swing = self.config.swing.trajectory(
+            p0, target, t_left, [(o.x_min, o.x_max, o.z_top_m) for o in obstacles]
+        )
+        self.swing_t0_s = sched.time_in_step_s
+        self.aim[foot] = target
+
+    def _on_step_start(self, state: RobotState) -> None:
+        sched = self.schedule
+        stance = sched.stance_foot
+        dt = sched.clip_dt(self._step_dt(state))
+        sched.set_step_dt(dt)
+        step_s = sched.current_step_duration_s
+        if step_s != self.step_time_s:
+            self._set_step_time(step_s)
+        self._steps.append(step_s)
+        self.landed = False
+        self.late = sched.step_index > 0 and not state.foot_contact[stance]
+        self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
+        if self.late:
+            # Keep the other foot down until this one lands (see ``_end_late``).
+            self.swing = None
+            aim = self.aim.get(stance, state.foot_pos_world_m[stance])
+            self.late_xy = aim[:2].copy()  # where its swing was aimed
+            self.foothold[sched.swing_foot] = state.foot_pos_world_m[sched.swing_foot].copy()
+            self.next_replan_s = -np.inf
+            return
+        if sched.step_index > 0:
+            self._measure_landing(state, stance)  # it did not touch down early
+        self._start_swing(state)
+
+    def _end_late(self, state: RobotState) -> None:
+        """The late foot landed (or the wait timed out): the other foot now swings."""
+        self.late = False
+        stance = self.schedule.stance_foot
+        if state.foot_contact[stance]:
+            self._measure_landing(state, stance)
+            self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
+        self._start_swing(state)
+
+    def _update_foothold(self, state: RobotState) -> None:
+        """Re-plan the swing foot's foothold with the current CoM state (until the last
+        ``retarget_stop_fraction`` of the swing) and bend the swing path to it."""
+        sched = self.schedule
+        if (
+            self.swing is None
+            or self.landed
+            or sched.phase_in_step > self.config.retarget_stop_fraction
+        ):
+            return
+        foot = sched.swing_foot
+        foothold = self._plan_swing_foothold(state, sched.time_left_in_step_s)
+        target = self._swing_target(foot, foothold, state.t_s + sched.time_left_in_step_s)
+        if self.swing.retarget(target, sched.time_in_step_s - self.swing_t0_s):
+            self.foothold[foot] = foothold
+            self.aim[foot] = target
+
+    # ------------------------------------------------------------- the MPC
+    def _step_dt(self, state: RobotState) -> float:
+        """MPC sampling time [s] of the step starting now (fixed: ``config.dt_s``)."""
+        return self.config.dt_s
+
+    @abstractmethod
+    def _replan(self, state: RobotState) -> None:
+        """Solve the MPC from ``state`` (sets what :meth:`_wrenches_now` returns)."""
+
+    @abstractmethod
+    def _wrenches_now(self, state: RobotState) -> np.ndarray | None:
+        """(2, 6) planned ``[f; tau]`` per foot (``FEET`` order) for now, None before the
+        first plan."""
+
+    # --------------------------------------------------------------- control
+    def compute(self, state: RobotState) -> np.ndarray:
+        sched = self.schedule
+        sched.advance_to(state.t_s)
+        if sched.step_index != self.step_seen:
+            self.step_seen = sched.step_index
+            self._on_step_start(state)
+        self._update_path(state)
+        swing, stance = sched.swing_foot, sched.stance_foot
+        if self.late:
+            if (
+                state.foot_contact[stance]
+                or sched.time_in_step_s >= self.config.late_touchdown_timeout_s
+            ):
+                self._end_late(state)
+        elif (
+            not self.landed
+            and sched.phase_in_step >= self.config.early_touchdown_phase
+            and state.foot_contact[swing]
+        ):
+            # Early touchdown: stance from now on (double support for the rest of the step).
+            self.landed = True
+            self.next_replan_s = -np.inf
+            self._measure_landing(state, swing)
+        if state.t_s >= self.next_replan_s:
+            self._update_foothold(state)
+            self._replan(state)
+            self.next_replan_s = state.t_s + self.config.replan_period_s
+        wrench = {}
+        planned = self._wrenches_now(state)
+        if planned is not None:
+            if self.late:
+                wrench[swing] = planned[FEET.index(swing)]
+            else:
+                wrench[stance] = planned[FEET.index(stance)]
+                if self.landed:
+                    wrench[swing] = planned[FEET.index(swing)]
+        target = {}
+        if self.late:  # keep lowering the late foot straight down until it lands
+            z = self.ground_z + self.robot.spec.foot_contact_radius_m - LATE_DEPTH_M
+            v = np.array([0.0, 0.0, -self.config.swing.touchdown_speed_mps])
+            target[stance] = (np.array([*self.late_xy, z]), v)
+        elif not self.landed and self.swing is not None:
+            t_swing = sched.time_in_step_s - self.swing_t0_s
+            target[swing] = (self.swing.position(t_swing), self.swing.velocity(t_swing))
+        yaw = None if self.robot.spec.planar else self._heading_cmd(state.t_s)
+        tau = self.low.torques(state, wrench, target, yaw)
+        if self.config.stance_gravity_ff and wrench:
+            r = self.robot
+            q, _ = r.mj_to_pin(state.qpos, state.qvel)
+            g = pin.computeGeneralizedGravity(r.pin_model, self._pin_data, q)[r.n_root_dofs :]
+            for foot in wrench:
+                idx = r.leg_joint_index[foot]
+                tau[idx] = np.clip(
+                    tau[idx] + g[idx], -r.torque_limit_nm[idx], r.torque_limit_nm[idx]
+                )
+        return tau
