@@ -436,11 +436,12 @@ class KDConfig:
 
 # --------------------------------------------------------------------------- pattern
 class _Pattern:
-    """Fixed COO layout of a sparse matrix built from dense blocks, in a fixed order.
+    """Fixed layout of a sparse matrix assembled from groups of dense blocks.
 
-    ``add`` reserves a dense block (explicit zeros included) and returns the slice of the
-    COO data array it occupies; :meth:`csc` turns a COO data array into a canonical CSC
-    with always the same ``indptr``/``indices`` (so QP workspaces can update in place).
+    The QP is assembled into a flat *assembly* array (one slot per reserved entry, in the
+    order reserved); :meth:`finalize` sorts the slots into canonical CSC order once, so
+    :meth:`csc` is one gather into a matrix with always the same ``indptr``/``indices``
+    (QP workspaces then update in place). Explicit zeros are kept.
     """
 
     def __init__(self, shape: tuple[int, int]) -> None:
@@ -452,20 +453,24 @@ class _Pattern:
         self._indices: np.ndarray | None = None
         self._indptr: np.ndarray | None = None
 
-    def add(self, rows: np.ndarray | int, cols: np.ndarray | int) -> slice:
-        r, c = np.meshgrid(np.atleast_1d(rows), np.atleast_1d(cols), indexing="ij")
-        self._rows.append(r.ravel())
-        self._cols.append(c.ravel())
+    def _reserve(self, rows: np.ndarray, cols: np.ndarray) -> slice:
+        self._rows.append(rows.ravel())
+        self._cols.append(cols.ravel())
         start = self.nnz
-        self.nnz += r.size
+        self.nnz += rows.size
         return slice(start, self.nnz)
 
+    def add(self, rows: np.ndarray, cols: np.ndarray) -> slice:
+        """Dense blocks ``rows[..., r] x cols[..., c]`` (leading axes: one block each);
+        slots in ``(block..., r, c)`` order, i.e. each block row-major."""
+        rows, cols = np.asarray(rows), np.asarray(cols)
+        r, c = np.broadcast_arrays(rows[..., :, None], cols[..., None, :])
+        return self._reserve(r, c)
+
     def add_diag(self, rows: np.ndarray, cols: np.ndarray) -> slice:
-        self._rows.append(np.asarray(rows).ravel())
-        self._cols.append(np.asarray(cols).ravel())
-        start = self.nnz
-        self.nnz += len(self._rows[-1])
-        return slice(start, self.nnz)
+        """Entries ``(rows[...], cols[...])`` (same shape), slots in C order."""
+        r, c = np.broadcast_arrays(np.asarray(rows), np.asarray(cols))
+        return self._reserve(r, c)
 
     def finalize(self) -> None:
         rows = np.concatenate(self._rows)
@@ -481,10 +486,23 @@ class _Pattern:
         self._indptr = ids.indptr.copy()
 
     def csc(self, data: np.ndarray) -> sp.csc_matrix:
-        assert self._perm is not None
-        return sp.csc_matrix(
+        """Canonical CSC matrix of an assembly array (nnz,) (a new matrix each call)."""
+        assert self._perm is not None and self._indices is not None and self._indptr is not None
+        out = sp.csc_matrix(
             (data[self._perm], self._indices.copy(), self._indptr.copy()), shape=self.shape
         )
+        out.has_canonical_format = True
+        return out
+
+
+def _skew_batch(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrices (..., 3, 3) of vectors (..., 3), entry for entry
+    :func:`~gaitnet_mpc.mpc.srbm.skew`."""
+    out = np.zeros((*v.shape[:-1], 3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
 
 
 # --------------------------------------------------------------------------- sub-problem
@@ -513,6 +531,8 @@ class KDSubproblem:
         if np.linalg.matrix_rank(c_rows) != 6:  # pragma: no cover - contact model change
             raise ConfigError("contact", c.contact, "stance wrench rows of full column rank")
         self._wrench_cache: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._wrench_stack_last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self._build_columns()
         self._build_patterns()
         self._build_cost_diag()
 
@@ -548,92 +568,89 @@ class KDSubproblem:
         h = self.horizon
         return N_FEET * h * self.n_wrench_rows + N_FEET * 3 * (h - 1)
 
-    def _build_patterns(self) -> None:
+    def _build_columns(self) -> None:
+        """Column index arrays of every variable group (layout of the module docstring)."""
         h = self.horizon
-        r3 = np.arange(3)
+        stage = _NS * np.arange(h + 1)[:, None]  # (h+1, 1) first column of each block
+        self._col_x = stage + np.arange(NX)  # (h+1, 12) x_k
+        self._col_pc = stage + NX + np.arange(3)  # (h+1, 3) dpc_k
+        foot = 3 * np.arange(N_FEET)[:, None] + np.arange(3)  # (2, 3)
+        self._col_f = stage[:h, :, None] + NX + 3 + foot  # (h, 2, 3) df_i,k
+        self._col_tau = self._col_f + 3 * N_FEET  # dtau_i,k
+        self._col_pf = self._col_f + 6 * N_FEET  # dpf_i,k
+
+    def _build_patterns(self) -> None:
+        """Reserve every nonzero of ``A_eq`` and ``A``, one vectorised group per kind of
+        block (all stages and feet at once), and the constant entries' values."""
+        h = self.horizon
+        r3, r6, r12 = np.arange(3), np.arange(6), np.arange(NX)
+        row = (15 + 15 * np.arange(h))[:, None]  # (h, 1) first dynamics row of stage k
+        x_k, x_next = self._col_x[:-1], self._col_x[1:]  # (h, 12)
+        pc_k, pc_next = self._col_pc[:-1], self._col_pc[1:]  # (h, 3)
+        rows_l = (row + 6 + r3)[:, None, :]  # (h, 1, 3) l_{k+1} rows (eqs. 14, 19)
+        rows_k = (row + 9 + r3)[:, None, :]  # (h, 1, 3) k_{k+1} rows (eqs. 15, 19)
+        rows_c = row + 12 + r3  # (h, 3) CoM rows (eq. 20)
+
         eq = _Pattern((self.m_eq, self.n))
-        self._s_x0 = eq.add_diag(np.arange(NX), self.ix(0) + np.arange(NX))
-        self._s_pc0 = eq.add_diag(NX + r3, self.ipc(0) + r3)
-        self._s_next: list[slice] = []
-        self._s_prev: list[slice] = []
-        self._s_hdt: list[slice] = []
-        self._s_df_diag: list[list[slice]] = []
-        self._s_dtau: list[list[slice]] = []
-        self._s_dpf: list[list[slice]] = []
-        self._s_df_arm: list[list[slice]] = []
-        self._s_dpc: list[slice] = []
-        self._s_com_next: list[slice] = []
-        self._s_com_prev: list[slice] = []
-        self._s_com_l: list[slice] = []
-        for k in range(h):
-            row = 15 + 15 * k
-            rows_x = row + np.arange(NX)
-            rows_l, rows_k, rows_c = row + 6 + r3, row + 9 + r3, row + 12 + r3
-            self._s_next.append(eq.add_diag(rows_x, self.ix(k + 1) + np.arange(NX)))
-            self._s_prev.append(eq.add_diag(rows_x, self.ix(k) + np.arange(NX)))
-            self._s_hdt.append(eq.add_diag(row + np.arange(6), self.ix(k) + 6 + np.arange(6)))
-            df_diag, dtau, dpf, df_arm = [], [], [], []
-            for i in range(N_FEET):
-                df_diag.append(eq.add_diag(rows_l, self.i_f(k, i) + r3))
-                dtau.append(eq.add_diag(rows_k, self.i_tau(k, i) + r3))
-                dpf.append(eq.add(rows_k, self.i_pf(k, i) + r3))
-                df_arm.append(eq.add(rows_k, self.i_f(k, i) + r3))
-            self._s_df_diag.append(df_diag)
-            self._s_dtau.append(dtau)
-            self._s_dpf.append(dpf)
-            self._s_df_arm.append(df_arm)
-            self._s_dpc.append(eq.add(rows_k, self.ipc(k) + r3))
-            self._s_com_next.append(eq.add_diag(rows_c, self.ipc(k + 1) + r3))
-            self._s_com_prev.append(eq.add_diag(rows_c, self.ipc(k) + r3))
-            self._s_com_l.append(eq.add_diag(rows_c, self.ix(k) + 6 + r3))
+        plus_one = (
+            eq.add_diag(r12, self._col_x[0]),  # x_0 = measurement
+            eq.add_diag(NX + r3, self._col_pc[0]),  # dpc_0 = 0
+            eq.add_diag(row + r12, x_next),  # x_{k+1}
+            eq.add_diag(rows_c, pc_next),  # dpc_{k+1}
+        )
+        minus_one = (eq.add_diag(row + r12, x_k), eq.add_diag(rows_c, pc_k))
+        self._s_hdt = eq.add_diag(row + r6, x_k[:, 6:])  # (h, 6): -dt h_k
+        self._s_df_diag = eq.add_diag(rows_l, self._col_f)  # (h, 2, 3): -dt df
+        self._s_dtau = eq.add_diag(rows_k, self._col_tau)  # (h, 2, 3): -dt dtau
+        self._s_dpf = eq.add(rows_k, self._col_pf)  # (h, 2, 3, 3): dt skew(f)
+        self._s_df_arm = eq.add(rows_k, self._col_f)  # (h, 2, 3, 3): -dt skew(r)
+        self._s_dpc = eq.add(rows_k[:, 0], pc_k)  # (h, 3, 3): -dt sum skew(f)
+        self._s_com_l = eq.add_diag(rows_c, x_k[:, 6:9])  # (h, 3): -dt / m l_k
         eq.finalize()
         self._eq = eq
+        data = np.zeros(eq.nnz)
+        for s in plus_one:
+            data[s] = 1.0
+        for s in minus_one:
+            data[s] = -1.0
+        self._eq_data_template = data
 
         ineq = _Pattern((self.m_ineq, self.n))
         mw = self.n_wrench_rows
-        self._s_wrench: list[list[slice]] = []
-        for k in range(h):
-            per_foot = []
-            for i in range(N_FEET):
-                rows = (k * N_FEET + i) * mw + np.arange(mw)
-                cols = np.r_[self.i_f(k, i) + r3, self.i_tau(k, i) + r3]
-                per_foot.append(ineq.add(rows, cols))
-            self._s_wrench.append(per_foot)
-        tie0 = N_FEET * h * mw
-        self._tie_row0 = tie0
-        self._s_tie_next: list[slice] = []
-        self._s_tie_prev: list[slice] = []
-        for k in range(h - 1):
-            for i in range(N_FEET):
-                rows = tie0 + (k * N_FEET + i) * 3 + r3
-                self._s_tie_next.append(ineq.add_diag(rows, self.i_pf(k + 1, i) + r3))
-                self._s_tie_prev.append(ineq.add_diag(rows, self.i_pf(k, i) + r3))
+        wrench_rows = mw * np.arange(h * N_FEET).reshape(h, N_FEET, 1) + np.arange(mw)
+        wrench_cols = np.concatenate([self._col_f, self._col_tau], axis=2)  # (h, 2, 6)
+        self._s_wrench = ineq.add(wrench_rows, wrench_cols)  # (h, 2, mw, 6)
+        self._tie_row0 = tie0 = N_FEET * h * mw
+        tie_rows = tie0 + 3 * np.arange((h - 1) * N_FEET).reshape(h - 1, N_FEET, 1) + r3
+        tie_next = ineq.add_diag(tie_rows, self._col_pf[1:])  # (h-1, 2, 3)
+        tie_prev = ineq.add_diag(tie_rows, self._col_pf[:-1])
         ineq.finalize()
         self._ineq = ineq
         data = np.zeros(ineq.nnz)
-        for s in self._s_tie_next:
-            data[s] = 1.0
-        for s in self._s_tie_prev:
-            data[s] = -1.0
+        data[tie_next] = 1.0
+        data[tie_prev] = -1.0
         self._ineq_data_template = data
 
     def _build_cost_diag(self) -> None:
+        """Diagonal weights of eq. 18 plus the proximal term, and the linear-cost factors."""
         c = self.config
-        h = self.horizon
         diag = np.zeros(self.n)  # weights W of sum_v W v^2 (P = 2 W)
-        for k in range(1, h + 1):
-            diag[self.ix(k) : self.ix(k) + 6] = c.w_pose
-            diag[self.ix(k) + 6 : self.ix(k) + 12] = c.w_momentum
-            diag[self.ipc(k) : self.ipc(k) + 3] = np.asarray(c.w_p_com) + c.reg_position
-        diag[self.ipc(0) : self.ipc(0) + 3] = c.reg_position
-        for k in range(h):
-            for i in range(N_FEET):
-                diag[self.i_f(k, i) : self.i_f(k, i) + 3] = c.w_force + c.reg_force
-                diag[self.i_tau(k, i) : self.i_tau(k, i) + 3] = c.w_moment + c.reg_moment
-                pf = self.i_pf(k, i)
-                diag[pf : pf + 3] = np.asarray(c.w_p_foot) + c.reg_position
+        diag[self._col_x[1:, :6]] = c.w_pose
+        diag[self._col_x[1:, 6:]] = c.w_momentum
+        diag[self._col_pc[1:]] = np.asarray(c.w_p_com) + c.reg_position
+        diag[self._col_pc[0]] = c.reg_position
+        diag[self._col_f] = c.w_force + c.reg_force
+        diag[self._col_tau] = c.w_moment + c.reg_moment
+        diag[self._col_pf] = np.asarray(c.w_p_foot) + c.reg_position
         self._w_diag = diag
         self._P = sp.diags(2.0 * diag, format="csc")
+        # gradient factors of eq. 18 at the iterate (q = 2 W (value - reference))
+        self._q_pose = -2.0 * np.asarray(c.w_pose)
+        self._q_momentum = -2.0 * np.asarray(c.w_momentum)
+        self._q_p_com = 2.0 * np.asarray(c.w_p_com)
+        self._q_force = 2.0 * c.w_force
+        self._q_moment = 2.0 * c.w_moment
+        self._q_p_foot = 2.0 * np.asarray(c.w_p_foot)
 
     # ------------------------------------------------------------------ validation
     def _check_inputs(
@@ -743,72 +760,50 @@ class KDSubproblem:
         return self._assemble(iterate, a)
 
     def _assemble(self, it: KDIterate, a: dict[str, Any]) -> QPProblem:
+        """The QP of :meth:`build`, every stage and foot at once (vectorised)."""
         c = self.config
         h = self.horizon
         m = c.mass_kg
-        dts = a["dts_s"]
-        contact = a["contact"]
+        dts = a["dts_s"]  # (h,)
+        contact = a["contact"]  # (h, 2)
         g_vec = np.array([0.0, 0.0, -c.gravity_mps2])
-        eye3 = np.ones(3)
+        arms = it.p_foot - it.p_com[:-1, None, :]  # (h, 2, 3) r_i^j = p_f,i - p_c,k
+        skew_f = _skew_batch(it.f)  # (h, 2, 3, 3)
+        skew_r = _skew_batch(arms)
 
-        # ---- equality rows (dynamics, eqs. 14, 15, 19, 20)
-        d = np.zeros(self._eq.nnz)
+        # ---- equality rows (dynamics, eqs. 14, 15, 19, 20). Row form of the angular rows:
+        # k_{k+1} - k_k - dt [dtau - skew(f) dpf + skew(f) dpc + skew(r) df]
+        #   = dt sum_i (r_i x f_i + tau_i)               (-f x dpf = -skew(f) dpf etc.)
+        d = self._eq_data_template.copy()
+        d[self._s_hdt] = np.repeat(-dts, 6)
+        d[self._s_df_diag] = np.repeat(-dts, 3 * N_FEET)
+        d[self._s_dtau] = np.repeat(-dts, 3 * N_FEET)
+        d[self._s_dpf] = (dts[:, None, None, None] * skew_f).ravel()
+        d[self._s_df_arm] = (-dts[:, None, None, None] * skew_r).ravel()
+        d[self._s_dpc] = (-dts[:, None, None] * (skew_f[:, 0] + skew_f[:, 1])).ravel()
+        d[self._s_com_l] = np.repeat(-dts / m, 3)
         b = np.zeros(self.m_eq)
-        d[self._s_x0] = 1.0
         b[:NX] = a["x0"]
-        d[self._s_pc0] = 1.0
-        for k in range(h):
-            dt = float(dts[k])
-            row = 15 + 15 * k
-            d[self._s_next[k]] = 1.0
-            d[self._s_prev[k]] = -1.0
-            d[self._s_hdt[k]] = -dt
-            arms = it.p_foot[k] - it.p_com[k]  # (2, 3) r_i^j
-            sum_skew_f = np.zeros((3, 3))
-            const_k = np.zeros(3)
-            for i in range(N_FEET):
-                f_i = it.f[k, i]
-                d[self._s_df_diag[k][i]] = -dt * eye3
-                d[self._s_dtau[k][i]] = -dt * eye3
-                d[self._s_dpf[k][i]] = (dt * skew(f_i)).ravel()  # -f x dpf = -skew(f) dpf
-                d[self._s_df_arm[k][i]] = (-dt * skew(arms[i])).ravel()  # r x df = skew(r) df
-                sum_skew_f += skew(f_i)
-                const_k += skew(arms[i]) @ f_i + it.tau[k, i]
-            # Row form: k_{k+1} - k_k - dt [dtau - skew(f) dpf + skew(f) dpc + skew(r) df]
-            #           = dt sum_i (r_i x f_i + tau_i)        (f x dpc = skew(f) dpc)
-            d[self._s_dpc[k]] = (-dt * sum_skew_f).ravel()
-            b[row + 6 : row + 9] = dt * (it.f[k].sum(axis=0) + m * g_vec)
-            b[row + 9 : row + 12] = dt * const_k
-            d[self._s_com_next[k]] = 1.0
-            d[self._s_com_prev[k]] = -1.0
-            d[self._s_com_l[k]] = -dt / m
-            b[row + 12 : row + 15] = it.p_com[k] - it.p_com[k + 1]
+        stage_b = b[15:].reshape(h, 15)  # view: rows of stage k
+        stage_b[:, 6:9] = dts[:, None] * (it.f.sum(axis=1) + m * g_vec)
+        torque = np.matmul(skew_r, it.f[..., None])[..., 0] + it.tau  # (h, 2, 3) r x f + tau
+        stage_b[:, 9:12] = dts[:, None] * (torque[:, 0] + torque[:, 1])
+        stage_b[:, 12:15] = it.p_com[:-1] - it.p_com[1:]
         a_eq = self._eq.csc(d)
 
         # ---- inequality rows: wrenches (eqs. 21-23) and foot ties
+        cm, l_w, u_w = self._wrench_stack(a["foot_yaw_rad"])  # (h, 2, mw, 6), (h, 2, mw) x2
         data = self._ineq_data_template.copy()
-        lo = np.empty(self.m_ineq)
-        hi = np.empty(self.m_ineq)
-        mw = self.n_wrench_rows
-        for k in range(h):
-            for i in range(N_FEET):
-                cm, l_, u_ = self._wrench_rows(float(a["foot_yaw_rad"][k, i]))
-                data[self._s_wrench[k][i]] = cm.ravel()
-                shift = cm @ np.r_[it.f[k, i], it.tau[k, i]]
-                rows = slice((k * N_FEET + i) * mw, (k * N_FEET + i + 1) * mw)
-                if contact[k, i]:
-                    lo[rows], hi[rows] = l_ - shift, u_ - shift
-                else:
-                    lo[rows], hi[rows] = -shift, -shift
-        for k in range(h - 1):
-            for i in range(N_FEET):
-                start = self._tie_row0 + (k * N_FEET + i) * 3
-                rows = slice(start, start + 3)
-                if contact[k, i] and not contact[k + 1, i]:  # lift-off: free (finite, see
-                    lo[rows], hi[rows] = -_FREE_TIE_M, _FREE_TIE_M  # _FREE_TIE_M)
-                else:
-                    gap = it.p_foot[k, i] - it.p_foot[k + 1, i]
-                    lo[rows], hi[rows] = gap, gap
+        data[self._s_wrench] = cm.ravel()
+        wrench = np.concatenate([it.f, it.tau], axis=2)[..., None]  # (h, 2, 6, 1)
+        shift = np.matmul(cm, wrench)[..., 0]  # (h, 2, mw): C w^j
+        stance = contact[:, :, None]
+        lo_w = np.where(stance, l_w - shift, -shift)  # swing: C (w^j + dw) = 0
+        hi_w = np.where(stance, u_w - shift, -shift)
+        free = (contact[:-1] & ~contact[1:])[:, :, None]  # lift-off between k and k+1
+        gap = it.p_foot[:-1] - it.p_foot[1:]  # (h-1, 2, 3)
+        lo = np.concatenate([lo_w.ravel(), np.where(free, -_FREE_TIE_M, gap).ravel()])
+        hi = np.concatenate([hi_w.ravel(), np.where(free, _FREE_TIE_M, gap).ravel()])
         a_in = self._ineq.csc(data)
 
         # ---- box: foot positions (measured stance foot, eq. 24, trust region)
@@ -817,23 +812,17 @@ class KDSubproblem:
         for i in range(N_FEET):
             self._foot_box(i, it, a, lb, ub)
         if c.trust_region_com_m is not None:
-            for k in range(1, h + 1):
-                lb[self.ipc(k) : self.ipc(k) + 3] = -c.trust_region_com_m
-                ub[self.ipc(k) : self.ipc(k) + 3] = c.trust_region_com_m
+            lb[self._col_pc[1:]] = -c.trust_region_com_m
+            ub[self._col_pc[1:]] = c.trust_region_com_m
 
         # ---- cost (eq. 18) + proximal term
         q = np.zeros(self.n)
-        for k in range(1, h + 1):
-            q[self.ix(k) : self.ix(k) + 6] = -2.0 * np.asarray(c.w_pose) * a["H_ref"][k]
-            q[self.ix(k) + 6 : self.ix(k) + 12] = -2.0 * np.asarray(c.w_momentum) * a["h_ref"][k]
-            err = it.p_com[k] - a["p_com_ref"][k]
-            q[self.ipc(k) : self.ipc(k) + 3] = 2.0 * np.asarray(c.w_p_com) * err
-        for k in range(h):
-            for i in range(N_FEET):
-                q[self.i_f(k, i) : self.i_f(k, i) + 3] = 2.0 * c.w_force * it.f[k, i]
-                q[self.i_tau(k, i) : self.i_tau(k, i) + 3] = 2.0 * c.w_moment * it.tau[k, i]
-                err = it.p_foot[k, i] - a["p_foot_ref"][k, i]
-                q[self.i_pf(k, i) : self.i_pf(k, i) + 3] = 2.0 * np.asarray(c.w_p_foot) * err
+        q[self._col_x[1:, :6]] = self._q_pose * a["H_ref"][1:]
+        q[self._col_x[1:, 6:]] = self._q_momentum * a["h_ref"][1:]
+        q[self._col_pc[1:]] = self._q_p_com * (it.p_com[1:] - a["p_com_ref"][1:])
+        q[self._col_f] = self._q_force * it.f
+        q[self._col_tau] = self._q_moment * it.tau
+        q[self._col_pf] = self._q_p_foot * (it.p_foot - a["p_foot_ref"])
         return QPProblem(self._P, q, A_eq=a_eq, b_eq=b, A=a_in, l=lo, u=hi, lb=lb, ub=ub)
 
     def _wrench_rows(self, yaw_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -849,6 +838,24 @@ class KDSubproblem:
             self._wrench_cache[yaw_rad] = rows
         return rows
 
+    def _wrench_stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Stance rows ``C`` (h, 2, mw, 6) and bounds ``l, u`` (h, 2, mw) of every stage
+        and foot; the last result is kept (the yaws are fixed within a sequential solve)."""
+        key = foot_yaw_rad.tobytes()
+        if self._wrench_stack_last is not None and self._wrench_stack_last[0] == key:
+            return self._wrench_stack_last[1]
+        rows = [self._wrench_rows(yaw) for yaw in foot_yaw_rad.ravel().tolist()]
+        shape = (*foot_yaw_rad.shape, self.n_wrench_rows)
+        out = (
+            np.stack([r[0] for r in rows]).reshape(*shape, 6),
+            np.stack([r[1] for r in rows]).reshape(shape),
+            np.stack([r[2] for r in rows]).reshape(shape),
+        )
+        for arr in out:
+            arr.flags.writeable = False
+        self._wrench_stack_last = (key, out)
+        return out
+
     def _foot_box(
         self, i: int, it: KDIterate, a: dict[str, Any], lb: np.ndarray, ub: np.ndarray
     ) -> None:
@@ -857,7 +864,7 @@ class KDSubproblem:
         contact_i = a["contact"][:, i]
         groups = tie_groups(contact_i)
         bounds = a["foothold_bounds"][i]
-        for g in np.unique(groups):
+        for g in range(int(groups[-1]) + 1):  # labels are 0, 1, ... (see tie_groups)
             stages = np.flatnonzero(groups == g)
             p_it = it.p_foot[stages, i]  # (n_g, 3)
             if g == 0 and contact_i[0]:  # measured stance foot: fixed
@@ -880,10 +887,9 @@ class KDSubproblem:
                     ok = t_lo <= t_hi  # trust box misses the foothold box: drop it there
                     lo_abs = np.where(ok, t_lo, lo_abs)
                     hi_abs = np.where(ok, t_hi, hi_abs)
-            for s, k in enumerate(stages):
-                col = self.i_pf(int(k), i)
-                lb[col : col + 3] = lo_abs - p_it[s]
-                ub[col : col + 3] = hi_abs - p_it[s]
+            cols = self._col_pf[stages, i]  # (n_g, 3)
+            lb[cols] = lo_abs - p_it
+            ub[cols] = hi_abs - p_it
 
     # ------------------------------------------------------------------ solve
     def unpack(self, z: np.ndarray) -> dict[str, np.ndarray]:

@@ -16,6 +16,7 @@ start: the ``warm_start`` argument is ignored.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, ClassVar
 
@@ -23,7 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from gaitnet_mpc.mpc.qp.problem import QPProblem
-from gaitnet_mpc.mpc.qp.structure import SparsityPattern, canonical_csc, triu_csc
+from gaitnet_mpc.mpc.qp.structure import EntrySelection, SparsityPattern
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 
 try:
@@ -47,11 +48,59 @@ _STATUS = MappingProxyType(
 )
 
 
+@dataclass(frozen=True, eq=False)
+class _Layout:
+    """How problems of one structure become PIQP's matrices, fixed until it changes.
+
+    Attributes:
+        triu: upper triangle of ``P`` as a position map into ``P.data``.
+        rows: inequality rows of ``A`` with a finite bound as a position map (``None``:
+            every row is kept and ``A`` is passed as it is).
+        P: PIQP's ``P`` (upper triangle); its ``data`` is overwritten by :meth:`P_of`.
+        G: PIQP's ``G`` when rows are dropped, else ``None``; overwritten by :meth:`G_of`.
+            PIQP copies its inputs on ``setup``/``update``, so reusing them is safe.
+    """
+
+    triu: EntrySelection
+    rows: EntrySelection | None
+    P: sp.csc_matrix
+    G: sp.csc_matrix | None
+
+    @classmethod
+    def of(cls, problem: QPProblem, keep: np.ndarray | None) -> _Layout:
+        triu = EntrySelection.upper_triangle(problem.P)
+        rows = G = None
+        if keep is not None and problem.A is not None and not keep.all():
+            rows = EntrySelection.rows(problem.A, keep)
+            G = rows.matrix(problem.A.data[rows.positions])
+        return cls(triu, rows, triu.matrix(problem.P.data[triu.positions]), G)
+
+    def P_of(self, problem: QPProblem) -> sp.csc_matrix:
+        """Upper triangle of ``problem.P``."""
+        self.P.data[:] = problem.P.data[self.triu.positions]
+        return self.P
+
+    def G_of(self, problem: QPProblem) -> sp.csc_matrix | None:
+        """Rows of ``problem.A`` with a finite bound; ``None`` if there are none."""
+        if self.rows is None or self.G is None:
+            return problem.A
+        if self.G.shape[0] == 0:
+            return None
+        assert problem.A is not None
+        self.G.data[:] = problem.A.data[self.rows.positions]
+        return self.G
+
+
 class PIQPWorkspace(QPWorkspace):
     """Sparse PIQP workspace with in-place updates.
 
     Options are attributes of ``piqp.SparseSolver().settings`` (``eps_abs``,
     ``eps_rel``, ``max_iter``, ``verbose``, ...).
+
+    The conversion to PIQP's form (upper triangle of ``P``, rows of ``A`` with a finite
+    bound) is a :class:`_Layout` built once per structure; later solves with the same
+    structure only gather value arrays through its position maps and send PIQP the
+    vectors and the matrices whose values changed.
     """
 
     name: ClassVar[str] = "piqp"
@@ -63,6 +112,7 @@ class PIQPWorkspace(QPWorkspace):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self._solver: Any = None
+        self._layout: _Layout | None = None
         self._last: dict[str, np.ndarray] = {}
 
     def _check_options(self, options: Mapping[str, Any]) -> None:
@@ -72,44 +122,51 @@ class PIQPWorkspace(QPWorkspace):
 
     def _reset_backend(self) -> None:
         self._solver = None
+        self._layout = None
         self._last = {}
 
+    def _structure_of(self, problem: QPProblem, keep: np.ndarray | None) -> tuple[Any, ...]:
+        """Patterns of ``P``, ``A_eq``, ``A``, the dropped rows and the box flag."""
+        dropped = () if keep is None else tuple(np.flatnonzero(~keep).tolist())
+        return (
+            SparsityPattern.of(problem.P),
+            SparsityPattern.of(problem.A_eq),
+            SparsityPattern.of(problem.A),
+            dropped,
+            problem.has_box,
+        )
+
     def _solve(self, problem: QPProblem, warm_start: np.ndarray | None) -> BackendResult:
-        P = triu_csc(problem.P)
-        A_eq, b_eq = problem.A_eq, problem.b_eq
-        G: sp.csc_matrix | None = None
-        h_l = h_u = None
+        keep = h_l = h_u = None
         if problem.A is not None:
             l, u = problem.ineq_bounds()
             keep = np.isfinite(l) | np.isfinite(u)
-            if keep.all():
-                G, h_l, h_u = problem.A, l, u
-            elif keep.any():
-                G = canonical_csc(problem.A[np.flatnonzero(keep)])
-                h_l, h_u = l[keep], u[keep]
+            h_l, h_u = (l, u) if keep.all() else (l[keep], u[keep])
         x_l = x_u = None
         if problem.has_box:
             x_l, x_u = problem.box_bounds()
 
+        changed = self._structure_changed(self._structure_of(problem, keep))
+        if changed or self._solver is None or self._layout is None:
+            self._layout = _Layout.of(problem, keep)
+        P = self._layout.P_of(problem)
+        A_eq = problem.A_eq
+        G = self._layout.G_of(problem)
+        if G is None:
+            h_l = h_u = None
         matrices = {"P": P, "A": A_eq, "G": G}
-        structure = (
-            SparsityPattern.of(P),
-            SparsityPattern.of(A_eq),
-            SparsityPattern.of(G),
-            problem.has_box,
-        )
-        if self._structure_changed(structure) or self._solver is None:
+        if changed or self._solver is None:
             self._solver = piqp.SparseSolver()
             for key, value in self.options.items():
                 setattr(self._solver.settings, key, value)
-            self._solver.setup(P, problem.q, A_eq, b_eq, G, h_l, h_u, x_l, x_u)
+            self._solver.setup(P, problem.q, A_eq, problem.b_eq, G, h_l, h_u, x_l, x_u)
         else:
             update: dict[str, Any] = {"c": problem.q}
             for key, matrix in matrices.items():
                 if matrix is not None and not np.array_equal(matrix.data, self._last[key]):
                     update[key] = matrix
             if A_eq is not None:
-                update["b"] = b_eq
+                update["b"] = problem.b_eq
             if G is not None:
                 update["h_l"], update["h_u"] = h_l, h_u
             if problem.has_box:

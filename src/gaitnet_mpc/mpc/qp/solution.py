@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Final
 
 import numpy as np
+
+from gaitnet_mpc.mpc.qp.problem import QPProblem
 
 #: Every status a :class:`QPSolution` can carry.
 #:
@@ -52,11 +55,16 @@ class QPSolution:
             the data conversion for the backend; excludes validation and the
             residual computation.
         backend: Registry name of the backend (``"osqp"``, ...).
+        native_status: The backend's own status text (or the exception text),
+            for logs and debugging.
+        problem: The solved problem (for :attr:`obj` and :attr:`primal_residual`).
         obj: ``0.5 x^T P x + q^T x`` computed by us, or ``None`` without ``x``.
         primal_residual: Largest constraint violation of ``x`` computed by us
             (max-norm over equality, inequality and box rows), or ``None``.
-        native_status: The backend's own status text (or the exception text),
-            for logs and debugging.
+
+    ``obj`` and ``primal_residual`` are evaluated on first access and then cached (two
+    sparse products each, which a controller solving hundreds of QPs a second need not
+    pay); the workspace hands over a problem it does not modify afterwards.
     """
 
     x: np.ndarray | None
@@ -65,6 +73,19 @@ class QPSolution:
     iterations: int
     solve_time_s: float
     backend: str
-    obj: float | None = None
-    primal_residual: float | None = None
     native_status: str = ""
+    problem: QPProblem | None = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def obj(self) -> float | None:
+        """``0.5 x^T P x + q^T x``, or ``None`` without ``x``."""
+        if self.x is None or self.problem is None:
+            return None
+        return self.problem.objective(self.x)
+
+    @cached_property
+    def primal_residual(self) -> float | None:
+        """Largest constraint violation of ``x`` (max-norm), or ``None`` without ``x``."""
+        if self.x is None or self.problem is None:
+            return None
+        return self.problem.primal_residual(self.x)

@@ -80,3 +80,68 @@ class SparsityPattern:
         )
 
     __hash__ = None  # type: ignore[assignment]
+
+
+@dataclass(frozen=True, eq=False)
+class EntrySelection:
+    """A sub-matrix of a canonical CSC matrix as a position map into its ``data``.
+
+    Built once per sparsity pattern: :attr:`positions` lists, in the sub-matrix's own
+    canonical order, where each of its entries sits in the source's ``data``, so the
+    sub-matrix of any matrix with the :attr:`source` pattern is
+    ``(source.data[positions], pattern)``, with no sparse-matrix operation per call.
+    Explicit zeros are kept.
+
+    Attributes:
+        source: pattern the map was built for.
+        positions: (nnz_sub,) int positions into the source's ``data``.
+        pattern: pattern of the sub-matrix.
+    """
+
+    source: SparsityPattern
+    positions: np.ndarray
+    pattern: SparsityPattern
+
+    @classmethod
+    def upper_triangle(cls, matrix: sp.csc_matrix) -> EntrySelection:
+        """Upper triangle, diagonal included (what :func:`triu_csc` returns)."""
+        source = SparsityPattern.of(matrix)
+        assert source is not None
+        cols = np.repeat(np.arange(source.shape[1]), np.diff(source.indptr))
+        keep = source.indices <= cols
+        return cls._select(source, keep, cols, source.indices, source.shape[0])
+
+    @classmethod
+    def rows(cls, matrix: sp.csc_matrix, keep_rows: np.ndarray) -> EntrySelection:
+        """The rows where ``keep_rows`` (bool, one per row) is True, renumbered in order
+        (what ``canonical_csc(matrix[np.flatnonzero(keep_rows)])`` returns)."""
+        source = SparsityPattern.of(matrix)
+        assert source is not None
+        keep_rows = np.asarray(keep_rows, dtype=bool)
+        cols = np.repeat(np.arange(source.shape[1]), np.diff(source.indptr))
+        new_row = np.cumsum(keep_rows) - 1
+        keep = keep_rows[source.indices]
+        return cls._select(source, keep, cols, new_row[source.indices], int(keep_rows.sum()))
+
+    @classmethod
+    def _select(
+        cls,
+        source: SparsityPattern,
+        keep: np.ndarray,
+        cols: np.ndarray,
+        rows: np.ndarray,
+        n_rows: int,
+    ) -> EntrySelection:
+        positions = np.flatnonzero(keep)
+        counts = np.bincount(cols[positions], minlength=source.shape[1])
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(source.indptr.dtype)
+        indices = rows[positions].astype(source.indices.dtype)
+        pattern = SparsityPattern((n_rows, source.shape[1]), indptr, indices)
+        return cls(source, positions, pattern)
+
+    def matrix(self, data: np.ndarray) -> sp.csc_matrix:
+        """A new canonical CSC sub-matrix holding ``data`` (sub-matrix order, not copied)."""
+        p = self.pattern
+        out = sp.csc_matrix((data, p.indices.copy(), p.indptr.copy()), shape=p.shape)
+        out.has_canonical_format = True
+        return out

@@ -217,21 +217,17 @@ class QPWorkspace(ABC):
                     status = "nan"
         if x is None and status in SOLVED_STATUSES:
             status = "nan"
-        residual = None if x is None else problem.primal_residual(x)
-        obj = None if x is None else problem.objective(x)
-        found = status == "solved" or (
-            status == "solved_inaccurate"
-            and residual is not None
-            and residual <= self.inaccurate_tol
-        )
-        return QPSolution(
+        sol = QPSolution(
             x=x,
             status=status,
-            found=found,
+            found=status == "solved",
             iterations=int(result.iterations),
             solve_time_s=float(elapsed),
             backend=self.name,
-            obj=obj,
-            primal_residual=residual,
             native_status=result.native_status,
+            problem=problem,
         )
+        if status == "solved_inaccurate":
+            residual = sol.primal_residual
+            sol.found = residual is not None and residual <= self.inaccurate_tol
+        return sol
