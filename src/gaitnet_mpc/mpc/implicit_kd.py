@@ -142,7 +142,7 @@ def _array(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray:
         raise ConfigError(name, value, f"a float array of shape {shape}") from None
     if arr.shape != shape:
         raise ConfigError(name, arr.shape, f"shape {shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ConfigError(name, "non-finite entries", "finite values")
     return arr
 
@@ -486,7 +486,8 @@ class _Pattern:
         self._indptr = ids.indptr.copy()
 
     def csc(self, data: np.ndarray) -> sp.csc_matrix:
-        """Canonical CSC matrix of an assembly array (nnz,) (a new matrix each call)."""
+        """Canonical CSC matrix of an assembly array (nnz,), always the same pattern (a
+        new matrix each call; the caller owns it)."""
         assert self._perm is not None and self._indices is not None and self._indptr is not None
         out = sp.csc_matrix(
             (data[self._perm], self._indices.copy(), self._indptr.copy()), shape=self.shape
@@ -859,37 +860,52 @@ class KDSubproblem:
     def _foot_box(
         self, i: int, it: KDIterate, a: dict[str, Any], lb: np.ndarray, ub: np.ndarray
     ) -> None:
-        """Box on ``delta p_f`` of foot ``i``, per tie group, in absolute positions."""
+        """Box on ``delta p_f`` of foot ``i``, per tie group, in absolute positions.
+
+        Per group (:func:`tie_groups`: swing stages, then the stance stages after them):
+        the measured position for the measured stance group; else the eq. 24 box if the
+        group holds a masked stage, the reference height (mean over the group's stance
+        stages, or all its stages) unless that box bounds the height, and the trust
+        region around the group's mean iterate. Groups are contiguous stage ranges, so
+        plain Python over the few groups with slices is cheapest here.
+        """
         c = self.config
-        contact_i = a["contact"][:, i]
-        groups = tie_groups(contact_i)
+        h = self.horizon
+        contact_i = a["contact"][:, i].tolist()
+        starts = [0] + [k for k in range(1, h) if contact_i[k - 1] and not contact_i[k]]
+        ends = [*starts[1:], h]
+        n_groups = len(starts)
+        p_it = it.p_foot[:, i]  # (h, 3)
+        lo = np.full((n_groups, 3), -np.inf)  # absolute bounds per group
+        hi = np.full((n_groups, 3), np.inf)
+        centre = np.zeros((n_groups, 3))  # mean iterate per group
         bounds = a["foothold_bounds"][i]
-        for g in range(int(groups[-1]) + 1):  # labels are 0, 1, ... (see tie_groups)
-            stages = np.flatnonzero(groups == g)
-            p_it = it.p_foot[stages, i]  # (n_g, 3)
-            if g == 0 and contact_i[0]:  # measured stance foot: fixed
-                lo_abs = hi_abs = a["p_foot_measured"][i]
-            else:
-                lo_abs = np.full(3, -np.inf)
-                hi_abs = np.full(3, np.inf)
-                if bounds is not None and np.any(bounds[2][stages]):
-                    lo_abs, hi_abs = bounds[0].copy(), bounds[1].copy()
-                if c.foot_height_from_reference and not (
-                    np.isfinite(lo_abs[2]) and np.isfinite(hi_abs[2])
-                ):
-                    stance = stages[contact_i[stages]]
-                    ref_z = a["p_foot_ref"][stance if stance.size else stages, i, 2]
-                    lo_abs[2] = hi_abs[2] = float(ref_z.mean())
-                if c.trust_region_m is not None:
-                    centre = p_it.mean(axis=0)
-                    t_lo = np.maximum(lo_abs, centre - c.trust_region_m)
-                    t_hi = np.minimum(hi_abs, centre + c.trust_region_m)
-                    ok = t_lo <= t_hi  # trust box misses the foothold box: drop it there
-                    lo_abs = np.where(ok, t_lo, lo_abs)
-                    hi_abs = np.where(ok, t_hi, hi_abs)
-            cols = self._col_pf[stages, i]  # (n_g, 3)
-            lb[cols] = lo_abs - p_it
-            ub[cols] = hi_abs - p_it
+        mask = None if bounds is None else bounds[2].tolist()
+        measured = contact_i[0]  # group 0 is the measured stance foot: fixed
+        ref_z = a["p_foot_ref"][:, i, 2]
+        for g in range(1 if measured else 0, n_groups):
+            s0, s1 = starts[g], ends[g]
+            centre[g] = np.add.reduce(p_it[s0:s1], axis=0) / (s1 - s0)  # == .mean(axis=0)
+            if mask is not None and any(mask[s0:s1]):
+                lo[g], hi[g] = bounds[0], bounds[1]  # type: ignore[index]
+            if c.foot_height_from_reference and not (
+                np.isfinite(lo[g, 2]) and np.isfinite(hi[g, 2])
+            ):
+                n_stance = sum(contact_i[s0:s1])  # stance stages end the group
+                z0 = s1 - n_stance if n_stance else s0
+                lo[g, 2] = hi[g, 2] = float(np.add.reduce(ref_z[z0:s1]) / (s1 - z0))
+        if c.trust_region_m is not None:
+            t_lo = np.maximum(lo, centre - c.trust_region_m)
+            t_hi = np.minimum(hi, centre + c.trust_region_m)
+            ok = t_lo <= t_hi  # trust box misses the foothold box: drop it there
+            lo = np.where(ok, t_lo, lo)
+            hi = np.where(ok, t_hi, hi)
+        if measured:
+            lo[0] = hi[0] = a["p_foot_measured"][i]
+        groups = np.repeat(np.arange(n_groups), np.subtract(ends, starts))  # (h,)
+        cols = self._col_pf[:, i]  # (h, 3)
+        lb[cols] = lo[groups] - p_it
+        ub[cols] = hi[groups] - p_it
 
     # ------------------------------------------------------------------ solve
     def unpack(self, z: np.ndarray) -> dict[str, np.ndarray]:
