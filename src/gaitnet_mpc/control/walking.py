@@ -56,6 +56,7 @@ from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.gait import (
     GaitSchedule,
     GaitScheduleConfig,
+    LandingBias,
     RaibertConfig,
     RaibertHeuristic,
     SwingConfig,
@@ -201,7 +202,9 @@ class WalkingController(Controller):
         self.late = False  # the stance foot has not touched down yet (the other stands)
         self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
         self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
-        self.land_bias = np.zeros(2)  # (forward, outward) swing overshoot [m]
+        self.landing = LandingBias(
+            c.landing_bias_gain, c.landing_bias_max_m, planar=self.robot.spec.planar
+        )
         self.step_seen = -1
         self.next_replan_s = -np.inf
 
@@ -344,27 +347,13 @@ class WalkingController(Controller):
         """Update the swing overshoot estimate with ``foot``'s touchdown point (once per
         swing; ``self.aim[foot]`` is where its swing was aimed)."""
         aim = self.aim.pop(foot, None)
-        if aim is None:
-            return
-        yaw = self._heading_cmd(state.t_s)
-        c, s_ = np.cos(yaw), np.sin(yaw)
-        ex, ey = state.foot_pos_world_m[foot][:2] - aim[:2]
-        side = 1.0 if foot == "left" else -1.0
-        err = np.array([c * ex + s_ * ey, side * (-s_ * ex + c * ey)])
-        if self.robot.spec.planar:
-            err[1] = 0.0  # the planar model's feet cannot move sideways
-        k, lim = self.config.landing_bias_gain, self.config.landing_bias_max_m
-        self.land_bias = np.clip(self.land_bias + k * (err - self.land_bias), -lim, lim)
+        if aim is not None:
+            yaw = self._heading_cmd(state.t_s)
+            self.landing.measure(foot, state.foot_pos_world_m[foot], aim, yaw)
 
     def _swing_target(self, foot: str, foothold: np.ndarray, t_s: float) -> np.ndarray:
         """Where to aim the swing foot so that it lands on ``foothold`` (bias removed)."""
-        yaw = self._heading_cmd(t_s)
-        c, s_ = np.cos(yaw), np.sin(yaw)
-        side = 1.0 if foot == "left" else -1.0
-        fwd, out = self.land_bias[0], side * self.land_bias[1]
-        target = foothold.copy()
-        target[:2] -= np.array([c * fwd - s_ * out, s_ * fwd + c * out])
-        return target
+        return self.landing.aim(foot, foothold, self._heading_cmd(t_s))
 
     def _start_swing(self, state: RobotState) -> None:
         """Plan the swing foot's foothold and a swing over the time left in the step."""

@@ -4,9 +4,11 @@
   double support) with one MPC sampling time per footstep (paper Sec. III-A, IV-B1).
 * :class:`SwingTrajectory` - swing-foot path over Δt = h'·dt with apex and obstacle clearance.
 * :class:`RaibertHeuristic` - foothold heuristic for controllers that do not optimise footholds.
+* :class:`LandingBias` - averaged swing landing error, subtracted from later swing aims.
 """
 
 from gaitnet_mpc.gait.foothold import RaibertConfig, RaibertHeuristic
+from gaitnet_mpc.gait.landing import LandingBias
 from gaitnet_mpc.gait.schedule import (
     GaitHorizon,
     GaitSchedule,
@@ -20,6 +22,7 @@ __all__ = [
     "GaitHorizon",
     "GaitSchedule",
     "GaitScheduleConfig",
+    "LandingBias",
     "RaibertConfig",
     "RaibertHeuristic",
     "StepDtLockedError",
