@@ -265,6 +265,11 @@ class ReferenceTiming:
             ("full_dts_s", full),
         ):
             object.__setattr__(new, name, value)
+        if np.array_equal(dts, self.dts_s):  # the same durations (every f_IK call of a
+            # sequential solve): share the read-only boundary times and D, functions of
+            # dts_s alone, instead of recomputing them (cached_property reads __dict__)
+            new.__dict__["times_s"] = self.times_s
+            new.__dict__["derivative_matrix"] = self.derivative_matrix
         return new
 
     @classmethod
