@@ -57,6 +57,12 @@ class SparsityPattern:
     indptr: np.ndarray
     indices: np.ndarray
 
+    def __post_init__(self) -> None:
+        # byte images of the index arrays: comparing them is one memcmp, cheaper than
+        # np.array_equal (patterns are compared on every solve of a workspace)
+        key = (self.indptr.tobytes(), self.indices.tobytes())
+        object.__setattr__(self, "_key", key)
+
     @classmethod
     def of(cls, matrix: sp.csc_matrix | None) -> SparsityPattern | None:
         """Pattern of ``matrix`` (copied), or ``None`` when ``matrix`` is ``None``."""
@@ -73,10 +79,12 @@ class SparsityPattern:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, SparsityPattern):
             return NotImplemented
-        return (
-            self.shape == other.shape
-            and np.array_equal(self.indptr, other.indptr)
-            and np.array_equal(self.indices, other.indices)
+        if self.shape != other.shape:
+            return False
+        if self.indptr.dtype == other.indptr.dtype and self.indices.dtype == other.indices.dtype:
+            return bool(self._key == other._key)  # type: ignore[attr-defined]
+        return np.array_equal(self.indptr, other.indptr) and np.array_equal(
+            self.indices, other.indices
         )
 
     __hash__ = None  # type: ignore[assignment]
