@@ -27,7 +27,7 @@ from gaitnet_mpc.mpc.implicit_kd import (
     next_touchdown_mask,
     tie_groups,
 )
-from gaitnet_mpc.mpc.qp import QPProblem, make_workspace
+from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, make_workspace
 from gaitnet_mpc.mpc.qp.structure import EntrySelection, canonical_csc, triu_csc
 from gaitnet_mpc.mpc.srbm import skew
 
@@ -278,3 +278,18 @@ def test_entry_selection_matches_scipy(seed: int) -> None:
     assert got.shape == expected.shape
     np.testing.assert_array_equal(got.toarray(), expected.toarray())
     assert np.array_equal(got.indices, expected.indices)
+
+
+def test_solution_objective_and_residual_are_evaluated_on_demand() -> None:
+    """Workspaces leave ``obj``/``primal_residual`` to the first read (then cached);
+    values given to the constructor are kept as they are."""
+    problem = QPProblem(np.eye(2), [1.0, 2.0], A=[[1.0, 1.0]], l=[0.0])
+    sol = make_workspace("piqp").solve_or_raise(problem)
+    assert sol.x is not None and "_obj" in sol.__dict__ and sol.__dict__["_obj"] is None
+    assert sol.obj == problem.objective(sol.x)
+    assert sol.primal_residual == problem.primal_residual(sol.x)
+    assert sol.__dict__["_obj"] == sol.obj  # cached
+    given = QPSolution(sol.x, "solved", True, 1, 0.0, "piqp", 3.0, 0.5, "ok", problem)
+    assert (given.obj, given.primal_residual) == (3.0, 0.5)
+    bare = QPSolution(None, "infeasible", False, 0, 0.0, "piqp", problem=problem)
+    assert bare.obj is None and bare.primal_residual is None

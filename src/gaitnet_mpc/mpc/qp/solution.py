@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -36,6 +35,34 @@ STATUSES: Final = (
 SOLVED_STATUSES: Final = frozenset({"solved", "solved_inaccurate"})
 
 
+class _FromProblem:
+    """A :class:`QPSolution` field evaluated from its problem on first read.
+
+    Given a value (``QPSolution(obj=...)``) the field holds it; left ``None`` (the
+    default) it is ``problem.<method>(x)`` on the first read, then cached, and stays
+    ``None`` without ``x`` or ``problem``.
+    """
+
+    def __init__(self, method: str) -> None:
+        self.method = method
+        self.slot = ""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.slot = f"_{name}"
+
+    def __get__(self, solution: Any, owner: type | None = None) -> float | None:
+        if solution is None:
+            return None  # the dataclass field's default
+        value = solution.__dict__.get(self.slot)
+        if value is None and solution.x is not None and solution.problem is not None:
+            value = getattr(solution.problem, self.method)(solution.x)
+            solution.__dict__[self.slot] = value
+        return value
+
+    def __set__(self, solution: Any, value: float | None) -> None:
+        solution.__dict__[self.slot] = value
+
+
 @dataclass
 class QPSolution:
     """Outcome of :meth:`QPWorkspace.solve`.
@@ -55,16 +82,16 @@ class QPSolution:
             the data conversion for the backend; excludes validation and the
             residual computation.
         backend: Registry name of the backend (``"osqp"``, ...).
-        native_status: The backend's own status text (or the exception text),
-            for logs and debugging.
-        problem: The solved problem (for :attr:`obj` and :attr:`primal_residual`).
         obj: ``0.5 x^T P x + q^T x`` computed by us, or ``None`` without ``x``.
         primal_residual: Largest constraint violation of ``x`` computed by us
             (max-norm over equality, inequality and box rows), or ``None``.
-
-    ``obj`` and ``primal_residual`` are evaluated on first access and then cached (two
-    sparse products each, which a controller solving hundreds of QPs a second need not
-    pay); the workspace hands over a problem it does not modify afterwards.
+        native_status: The backend's own status text (or the exception text),
+            for logs and debugging.
+        problem: The solved problem, from which ``obj`` and ``primal_residual`` are
+            evaluated on first read and then cached (two sparse products each, which
+            a controller solving hundreds of QPs a second need not pay); workspaces
+            hand over the problem they solved, which the caller owns and should not
+            modify.
     """
 
     x: np.ndarray | None
@@ -73,19 +100,7 @@ class QPSolution:
     iterations: int
     solve_time_s: float
     backend: str
+    obj: float | None = _FromProblem("objective")  # type: ignore[assignment]
+    primal_residual: float | None = _FromProblem("primal_residual")  # type: ignore[assignment]
     native_status: str = ""
     problem: QPProblem | None = field(default=None, repr=False, compare=False)
-
-    @cached_property
-    def obj(self) -> float | None:
-        """``0.5 x^T P x + q^T x``, or ``None`` without ``x``."""
-        if self.x is None or self.problem is None:
-            return None
-        return self.problem.objective(self.x)
-
-    @cached_property
-    def primal_residual(self) -> float | None:
-        """Largest constraint violation of ``x`` (max-norm), or ``None`` without ``x``."""
-        if self.x is None or self.problem is None:
-            return None
-        return self.problem.primal_residual(self.x)
