@@ -220,3 +220,19 @@ def test_kd_run_folder_gets_the_momentum_plot(tmp_path: Path) -> None:
     assert sorted(p.name for p in written) == sorted([*BASE_PLOTS, "momentum.png"])
     for path in written:
         _assert_png(path)
+
+
+def test_planned_footholds_are_drawn_as_discs_on_the_ground() -> None:
+    import mujoco
+
+    from gaitnet_mpc.sim.episode import _draw_footholds
+
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+    scene = mujoco.MjvScene(model, maxgeom=3)
+    holds = [("left", np.array([0.3, 0.1, 0.012])), ("right", np.array([0.5, -0.1, 0.032]))]
+    _draw_footholds(scene, holds + holds, height_m=0.01)  # 4 markers, room for 3
+    assert scene.ngeom == 3
+    np.testing.assert_allclose(scene.geoms[0].pos, [0.3, 0.1, 0.004], atol=1e-6)
+    np.testing.assert_allclose(scene.geoms[1].pos, [0.5, -0.1, 0.024], atol=1e-6)
+    assert scene.geoms[0].rgba[2] > scene.geoms[0].rgba[0]  # left: blue
+    assert scene.geoms[1].rgba[0] > scene.geoms[1].rgba[2]  # right: red

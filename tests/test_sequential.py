@@ -76,3 +76,6 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
     assert summary["distance_m"] > 1.1  # past the gap's far edge (0.9 m) by a margin
     assert any(f["pos_m"][0] > 0.95 for f in summary["footholds"])
     assert summary["mpc"]["converged_fraction"] > 0.9
+    holds = ctrl.planned_footholds()  # the next touchdown of each foot (drawn in videos)
+    assert sorted(f for f, _ in holds) == ["left", "right"]
+    assert all(p[0] > summary["distance_m"] - 0.3 for _, p in holds)

@@ -77,3 +77,8 @@ class Controller(ABC):
     def step_durations_s(self) -> list[float]:
         """Planned duration of each step the controller started (empty if it does not step)."""
         return []
+
+    def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
+        """(foot, position (3,) [m]) of each upcoming touchdown the controller plans now
+        (drawn in the video); empty if it plans none."""
+        return []

@@ -151,6 +151,16 @@ class KDWalkController(Controller):
     def step_durations_s(self) -> list[float]:
         return self._steps
 
+    def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
+        if self.plan is None:
+            return []
+        out = []
+        for foot in FEET:
+            td = self.plan.touchdown(foot)
+            if td is not None:
+                out.append((foot, td.copy()))
+        return out
+
     # ---------------------------------------------------------------- helpers
     def _command_now(self, t_s: float) -> _RampedCommand:
         c = self.command

@@ -234,6 +234,12 @@ class WalkingController(Controller):
     def step_durations_s(self) -> list[float]:
         return self._steps
 
+    def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
+        foot = self.schedule.swing_foot
+        if self.swing is None or self.landed or self.late:
+            return []
+        return [(foot, self.foothold[foot].copy())]
+
     # ------------------------------------------------------------- helpers
     def _ramp(self, t_s: float) -> float:
         """Fraction of the command applied ``t_s`` after the start (acceleration limit)."""

@@ -216,6 +216,29 @@ class _MPCProbe:
         return [t_plan + float(dts[0]), states[1, 6], states[1, 10], states[1, 11]]
 
 
+#: Marker colours (RGBA) of planned footholds, as the course colours: left blue, right red.
+_FOOT_RGBA = {"left": (0.15, 0.3, 0.9, 0.9), "right": (0.9, 0.15, 0.15, 0.9)}
+
+
+def _draw_footholds(scene: Any, footholds: list[tuple[str, np.ndarray]], height_m: float) -> None:
+    """Add a flat disc (radius 3 cm) on the ground under each planned foothold (foot
+    centre ``height_m`` above the sole) to the rendered scene."""
+    import mujoco
+
+    for foot, pos in footholds:
+        if scene.ngeom >= scene.maxgeom:
+            return
+        mujoco.mjv_initGeom(
+            scene.geoms[scene.ngeom],
+            mujoco.mjtGeom.mjGEOM_CYLINDER,
+            np.array([0.03, 0.002, 0.0]),
+            np.asarray(pos, dtype=float) - np.array([0.0, 0.0, height_m - 0.002]),
+            np.eye(3).ravel(),
+            np.array(_FOOT_RGBA[foot], dtype=np.float32),
+        )
+        scene.ngeom += 1
+
+
 def _log_row(
     state: Any, cmd: Command, tau: np.ndarray, tau_limit: np.ndarray, probe: _MPCProbe
 ) -> np.ndarray:
@@ -279,6 +302,7 @@ def run_episode(
             tmp_video, fps=video.fps, codec="libx264", quality=7, macro_block_size=8
         )
         frame_dt = 1.0 / video.fps
+        foot_r = sim.robot.spec.foot_contact_radius_m
     bar = _progress_bar(duration_s) if progress else None
     viewer_dt, next_view_t = 1.0 / 60.0, 0.0
     t_wall0 = time.perf_counter()
@@ -294,6 +318,7 @@ def run_episode(
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
                 t_r = time.perf_counter()
                 renderer.update_scene(sim.data, camera="track")
+                _draw_footholds(renderer.scene, controller.planned_footholds(), foot_r)
                 writer.append_data(renderer.render())
                 render_wall_s += time.perf_counter() - t_r
                 next_frame_t += frame_dt
