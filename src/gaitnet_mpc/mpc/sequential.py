@@ -108,13 +108,12 @@ class SequentialResult:
 def mpc_foot_reference(ref: CentroidalReference, contact: np.ndarray) -> np.ndarray:
     """(h, 2, 3) foothold reference per stage: where a stance foot stands, and for a
     swinging foot its next touchdown (the sub-problem ties swing stages to it)."""
-    h = contact.shape[0]
-    out = np.zeros((h, 2, 3))
+    out = np.zeros((contact.shape[0], 2, 3))
     for i, foot in enumerate(FEET):
-        holds = ref.footholds_m[foot]
-        for k in range(h):
-            j = int(ref.foothold_index[k, i]) + (0 if contact[k, i] else 1)
-            out[k, i] = holds[min(j, len(holds) - 1)]
+        holds = np.asarray(ref.footholds_m[foot])
+        stand = np.asarray(contact[:, i], dtype=bool)
+        j = np.asarray(ref.foothold_index[: stand.size, i], dtype=int) + ~stand
+        out[:, i] = holds[np.minimum(j, len(holds) - 1)]
     return out
 
 
