@@ -65,9 +65,10 @@ def main() -> None:
         m = r["mpc"]
         rmse = r["speed_rmse_mps"]
         hit = 1.0 - m["converged_fraction"]
+        fall_t = f"{r['fall_time_s']:.2f}" if r["fell"] else "-"
         lines.append(
             f"| {r['label']} | {'yes' if r['fell'] else 'no'} | "
-            f"{r['fall_time_s'] if r['fell'] else '-'} | {r['distance_m']:.2f} | "
+            f"{fall_t} | {r['distance_m']:.2f} | "
             f"{rmse:.3f} | {len(r['footholds'])} | {r['foothold_violations']} | "
             f"{m.get('qps_per_full_mean', float('nan')):.1f} | "
             f"{m.get('qps_per_replan_mean', float('nan')):.1f} | "
@@ -79,6 +80,9 @@ def main() -> None:
         "",
         "Commands: the same scenario with the CLI is `gaitnet-mpc run --controller kd "
         "--robot ROBOT --course COURSE --vx VX --dt DT --duration T`.",
+        "",
+        "Solve times and RTF are wall times on a shared machine and move with its load; "
+        "`results/kd_solve.md` compares solver versions in one interleaved run.",
         "",
     ]
     report = "\n".join(lines)
