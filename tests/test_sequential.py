@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.robots import FEET, load_robot
 from gaitnet_mpc.sim.episode import Command, run_episode
 from gaitnet_mpc.sim.simulator import Simulator
@@ -79,3 +80,31 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
     holds = ctrl.planned_footholds()  # the next touchdown of each foot (drawn in videos)
     assert sorted(f for f, _ in holds) == ["left", "right"]
     assert all(p[0] > summary["distance_m"] - 0.3 for _, p in holds)
+
+
+def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
+    """With the LIP sway orbit as the lateral CoM reference, the first plan's footholds lie
+    on both sides of the commanded path (the line reference plans a near-tightrope)."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+
+    course = load_course("flat")
+    command = Command(vx_mps=0.5)
+    sim = Simulator(humanoid, course)
+    cfg = replace(KDWalkConfig(), lateral_reference="lip", lip_half_width_m=0.07)
+    ctrl = KDWalkController(humanoid, course, command, config=cfg)
+    state = sim.state()
+    ctrl.reset(state)
+    ctrl.compute(state)
+    plan = ctrl.plan
+    y0 = state.com_world_m[1]
+    it = plan.iterate
+    left_y = it.p_foot[:, FEET.index("left"), 1][plan.contact[:, 0]]
+    right_y = it.p_foot[:, FEET.index("right"), 1][plan.contact[:, 1]]
+    assert left_y.min() > y0 + 0.03
+    assert right_y.max() < y0 - 0.03
+    timing = ReferenceTiming.from_horizon(ctrl.schedule.horizon())
+    ref_p, _ = ctrl._lip_reference(state, timing, ctrl._command_now(state.t_s))
+    # the orbit is continuous and returns to the centre line at every step switch
+    assert np.all(np.abs(np.diff(ref_p[:, 1])) < 0.03)

@@ -80,6 +80,14 @@ class KDWalkConfig:
     foothold_margin_m: float = 0.05
     foothold_reach_m: float = 0.2  # |x_foot - x_com| at touchdown that selects a patch
     touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
+    # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
+    # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
+    # with feet at +-lip_half_width_m beside a centre line (see _lip_reference).
+    lateral_reference: str = "line"
+    lip_half_width_m: float = 0.07
+    # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
+    # None: the centre is the commanded path itself.
+    lip_anchor_max_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -234,6 +242,70 @@ class KDWalkController(Controller):
             lo[1], hi[1] = -np.inf, np.inf
         return {foot: (lo, hi, None)}
 
+    def _lip_reference(
+        self, state: RobotState, timing: ReferenceTiming, cmd: _RampedCommand
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """CoM path and velocity (h+1, 3) whose lateral part is the LIP sway orbit.
+
+        With a line foot (no roll moment) the CoM obeys ``y'' = omega^2 (y - p_y)`` about the
+        stance foot ``p_y``, so a gait with feet at ``+-b`` beside a centre line needs the
+        periodic sway ``y = s b (1 - cosh(omega (tau - T/2)) / cosh(omega T / 2))`` (``s``
+        = +1 in left stance, ``tau`` the time in a step of length ``T``), ``y' = -s b omega
+        sinh(omega (tau - T/2)) / cosh(omega T / 2)``. The straight line with ``l_y = 0`` is
+        only reachable with the feet under the CoM. The centre line is the commanded path
+        (lateral offset from the measured CoM clamped by ``lip_anchor_max_m``); x and the
+        height are f_ref's (NaN).
+        """
+        if self.robot.spec.planar or self.config.lateral_reference != "lip":
+            return None
+        times = timing.times_s
+        dts = np.asarray(timing.dts_s, dtype=float)
+        contact = np.asarray(timing.contact, dtype=bool)
+        h = dts.size
+        n = timing.stages_per_step
+        # step start time and length of each stage's step
+        start = np.empty(h)
+        length = np.empty(h)
+        s0 = -float(timing.time_in_step_s)
+        for k in range(h):
+            if k > 0 and not np.array_equal(contact[k], contact[k - 1]):
+                s0 = float(times[k])
+            start[k] = s0
+        for k in range(h):
+            first = int(np.searchsorted(times, start[k] - 1e-9)) if start[k] >= 0 else 0
+            length[k] = n * float(dts[min(first, h - 1)])
+        side = np.where(contact[:, 0] & ~contact[:, 1], 1.0, np.where(contact[:, 1], -1.0, 0.0))
+        kk = np.minimum(np.arange(h + 1), h - 1)
+        tau = times - start[kk]
+        T = length[kk]
+        z = max(float(self.mpc.ref_workspace.com_height_m), 0.2)
+        w = np.sqrt(9.81 / z)
+        b = self.config.lip_half_width_m
+        den = np.cosh(w * T / 2)
+        y_off = side[kk] * b * (1.0 - np.cosh(w * (tau - T / 2)) / den)
+        v_off = -side[kk] * b * w * np.sinh(w * (tau - T / 2)) / den
+        # centre line: commanded path, lateral offset from the measured CoM
+        yaw = cmd.heading_rad
+        e_x = np.array([np.cos(yaw), np.sin(yaw)])
+        e_y = np.array([-np.sin(yaw), np.cos(yaw)])
+        c = self.command
+        t = state.t_s - self.t0_s
+        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
+        t_ramp = v_max / self.config.max_accel_mps2
+        travel = t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
+        path = self.com0[:2] + travel * (e_x * c.vx_mps + e_y * c.vy_mps)
+        lat = float(e_y @ (path - state.com_world_m[:2]))
+        lim = self.config.lip_anchor_max_m
+        if lim is not None:
+            lat = float(np.clip(lat, -lim, lim))
+        v_cmd = e_x * cmd.vx_mps + e_y * cmd.vy_mps
+        centre = state.com_world_m[:2] + lat * e_y + times[:, None] * v_cmd
+        p = np.full((h + 1, 3), np.nan)
+        v = np.full((h + 1, 3), np.nan)
+        p[:, :2] = centre + y_off[:, None] * e_y
+        v[:, :2] = v_cmd + v_off[:, None] * e_y
+        return p, v
+
     # ---------------------------------------------------------------- planning
     def _solve(self, state: RobotState, full: bool) -> None:
         sched = self.schedule
@@ -266,6 +338,7 @@ class KDWalkController(Controller):
                 foothold_bounds=self._bounds(state, swing, target),
                 j_max=None if full else self.config.replan_j_max,
                 p_com_start_m=self._path_start(state),
+                com_reference=self._lip_reference(state, timing, cmd),
             )
         except QPSolveError:
             self._stats.record(0.0, 1, False, full)

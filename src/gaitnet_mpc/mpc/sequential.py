@@ -71,6 +71,10 @@ class SequentialConfig:
     kd: KDConfig = field(default_factory=KDConfig)
     update_foot_reference: bool = True  # Alg. 1 line 9 re-makes p_f_ref from the iterate
     linear_reference_from_command: bool = True
+    # Take half a step when a search direction (nearly) reverses the previous one: the
+    # iteration (with f_IK's reference updates, which the QP does not linearise) can
+    # settle into a period-2 cycle that never meets the Table X tolerances.
+    damp_oscillation: bool = False
 
 
 @dataclass
@@ -103,6 +107,25 @@ class SequentialResult:
         if after.size == 0:
             return self.iterate.p_foot[swinging[0], i]
         return self.iterate.p_foot[swinging[0] + after[0], i]
+
+
+def _reverses(step: KDStep, prev: KDStep, ratio: float = 0.2) -> bool:
+    """Whether ``step`` nearly undoes ``prev`` (``|s + s_prev| < ratio |s|`` over the
+    foot, CoM, force and moment directions, forces in units of 100 N, moments of 10 N m)."""
+
+    def vec(s: KDStep) -> np.ndarray:
+        return np.concatenate(
+            [
+                s.delta_p_foot.ravel(),
+                s.delta_p_com.ravel(),
+                s.delta_f.ravel() / 100.0,
+                s.delta_tau.ravel() / 10.0,
+            ]
+        )
+
+    a, b = vec(step), vec(prev)
+    n = float(np.linalg.norm(a))
+    return n > 0.0 and float(np.linalg.norm(a + b)) < ratio * n
 
 
 def mpc_foot_reference(ref: CentroidalReference, contact: np.ndarray) -> np.ndarray:
@@ -161,6 +184,7 @@ class SequentialKDMPC:
         foothold_bounds: Mapping[str, tuple[np.ndarray, np.ndarray, None]] | None = None,
         j_max: int | None = None,
         p_com_start_m: np.ndarray | None = None,
+        com_reference: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> SequentialResult:
         """Run Algorithm 1 from the measured state (q, v) in Pinocchio coordinates.
 
@@ -176,6 +200,13 @@ class SequentialKDMPC:
             j_max: iteration cap (default ``config.j_max``).
             p_com_start_m: start of the reference CoM path (default: the measured CoM);
                 a point on the commanded path lets the MPC correct drift.
+            com_reference: optional ``(p_com (h+1, 3) [m], v_com (h+1, 3) [m/s])`` that
+                replaces the CoM path of ``f_ref`` in eq. 18's CoM term, the linear
+                centroidal pose ``m p_c`` and the linear momentum ``m v_c`` (with
+                ``linear_reference_from_command``), e.g. a LIP sway orbit over the
+                planned footholds (the straight command line with ``l_y = 0`` is only
+                reachable with the feet under the CoM, as the line foot has no roll
+                moment). NaN entries keep ``f_ref``'s value.
         """
         t0 = time.perf_counter()
         cfg = self.config
@@ -212,11 +243,21 @@ class SequentialKDMPC:
         pf_ref = mpc_foot_reference(ref, contact)
         p_com_ref = ref.p_com_ref  # f_ref's CoM path; line 9 updates x_ref and p_f_ref only
         h_lin_ref, pose_lin_ref = ref.h_ref[:, :3].copy(), ref.H_ref[:, :3].copy()
+        if com_reference is not None:
+            pc_override = np.asarray(com_reference[0], dtype=float)
+            vc_override = np.asarray(com_reference[1], dtype=float)
+            p_com_ref = np.where(np.isnan(pc_override), p_com_ref, pc_override)
+            pose_lin_ref = np.where(np.isnan(pc_override), pose_lin_ref, mass * pc_override)
+            h_lin_ref = np.where(np.isnan(vc_override), h_lin_ref, mass * vc_override)
+            h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
+            pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
         iterate = KDIterate.initial(com0, p_com_ref, pf_ref, contact, mass)
-        h_ref, pose_ref = ref.h_ref, ref.H_ref
+        if com_reference is None:
+            h_ref, pose_ref = ref.h_ref, ref.H_ref
         step: KDStep | None = None
         converged = False
         n_qps = 0
+        prev: KDStep | None = None
         for _ in range(j_max or cfg.j_max):
             step = self.subproblem.solve(
                 x0,
@@ -232,13 +273,17 @@ class SequentialKDMPC:
                 p_measured,
             )
             n_qps += 1
-            iterate = iterate.apply(step)
+            alpha = 1.0
+            if cfg.damp_oscillation and prev is not None and _reverses(step, prev):
+                alpha = 0.5  # period-2 cycle: jump to its midpoint
+            iterate = iterate.apply(step, alpha)
+            prev = step
             if step.converged(cfg.tolerances):
                 converged = True
                 break
             ref = update_reference(robot, ref, iterate.p_foot, iterate.p_com, dts)
             h_ref, pose_ref = ref.h_ref, ref.H_ref
-            if cfg.linear_reference_from_command:
+            if cfg.linear_reference_from_command or com_reference is not None:
                 h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
                 pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
             if cfg.update_foot_reference:
