@@ -108,3 +108,12 @@ def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
     ref_p, _ = ctrl._lip_reference(state, timing, ctrl._command_now(state.t_s))
     # the orbit is continuous and returns to the centre line at every step switch
     assert np.all(np.abs(np.diff(ref_p[:, 1])) < 0.03)
+
+
+def test_sequential_config_rejects_bad_relaxation() -> None:
+    from gaitnet_mpc.errors import ConfigError
+    from gaitnet_mpc.mpc.sequential import SequentialConfig
+
+    for kwargs in ({"relax_step": 0.0}, {"relax_step": 1.5}, {"relax_after_qps": 0}):
+        with pytest.raises(ConfigError, match=next(iter(kwargs))):
+            SequentialConfig(**kwargs)

@@ -26,6 +26,7 @@ from typing import Protocol
 
 import numpy as np
 
+from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import centroidal_map_euler, euler_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
     CentroidalReference,
@@ -71,10 +72,22 @@ class SequentialConfig:
     kd: KDConfig = field(default_factory=KDConfig)
     update_foot_reference: bool = True  # Alg. 1 line 9 re-makes p_f_ref from the iterate
     linear_reference_from_command: bool = True
-    # Take half a step when a search direction (nearly) reverses the previous one: the
-    # iteration (with f_IK's reference updates, which the QP does not linearise) can
-    # settle into a period-2 cycle that never meets the Table X tolerances.
-    damp_oscillation: bool = False
+    # From QP number ``relax_after_qps`` + 1 on, apply ``relax_step`` times the search
+    # direction (under-relaxation of the fixed-point iteration). Measured on ``biped2d``
+    # (flat, 0.5 m/s, 6 s): solves hitting j_max 11 % -> 0.3 %, QPs per solve 10.3 -> 6.9,
+    # same walk; on ``humanoid3d`` 3 % -> 0.5 % (most solves converge in fewer QPs and
+    # are unaffected). None: full steps always (Algorithm 1 as printed).
+    relax_after_qps: int | None = 8
+    relax_step: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.j_max, int) or self.j_max < 1:
+            raise ConfigError("j_max", self.j_max, "an integer >= 1")
+        n = self.relax_after_qps
+        if n is not None and (not isinstance(n, int) or n < 1):
+            raise ConfigError("relax_after_qps", n, "None or an integer >= 1")
+        if not 0.0 < self.relax_step <= 1.0:
+            raise ConfigError("relax_step", self.relax_step, "a step fraction in (0, 1]")
 
 
 @dataclass
@@ -107,25 +120,6 @@ class SequentialResult:
         if after.size == 0:
             return self.iterate.p_foot[swinging[0], i]
         return self.iterate.p_foot[swinging[0] + after[0], i]
-
-
-def _reverses(step: KDStep, prev: KDStep, ratio: float = 0.2) -> bool:
-    """Whether ``step`` nearly undoes ``prev`` (``|s + s_prev| < ratio |s|`` over the
-    foot, CoM, force and moment directions, forces in units of 100 N, moments of 10 N m)."""
-
-    def vec(s: KDStep) -> np.ndarray:
-        return np.concatenate(
-            [
-                s.delta_p_foot.ravel(),
-                s.delta_p_com.ravel(),
-                s.delta_f.ravel() / 100.0,
-                s.delta_tau.ravel() / 10.0,
-            ]
-        )
-
-    a, b = vec(step), vec(prev)
-    n = float(np.linalg.norm(a))
-    return n > 0.0 and float(np.linalg.norm(a + b)) < ratio * n
 
 
 def mpc_foot_reference(ref: CentroidalReference, contact: np.ndarray) -> np.ndarray:
@@ -257,7 +251,6 @@ class SequentialKDMPC:
         step: KDStep | None = None
         converged = False
         n_qps = 0
-        prev: KDStep | None = None
         for _ in range(j_max or cfg.j_max):
             step = self.subproblem.solve(
                 x0,
@@ -274,10 +267,9 @@ class SequentialKDMPC:
             )
             n_qps += 1
             alpha = 1.0
-            if cfg.damp_oscillation and prev is not None and _reverses(step, prev):
-                alpha = 0.5  # period-2 cycle: jump to its midpoint
+            if cfg.relax_after_qps is not None and n_qps > cfg.relax_after_qps:
+                alpha = cfg.relax_step
             iterate = iterate.apply(step, alpha)
-            prev = step
             if step.converged(cfg.tolerances):
                 converged = True
                 break
