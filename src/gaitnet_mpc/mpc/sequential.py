@@ -73,11 +73,12 @@ class SequentialConfig:
     update_foot_reference: bool = True  # Alg. 1 line 9 re-makes p_f_ref from the iterate
     linear_reference_from_command: bool = True
     # From QP number ``relax_after_qps`` + 1 on, apply ``relax_step`` times the search
-    # direction (under-relaxation of the fixed-point iteration). Measured on ``biped2d``
-    # (flat, 0.5 m/s, 6 s): solves hitting j_max 11 % -> 0.3 %, QPs per solve 10.3 -> 6.9,
-    # same walk; on ``humanoid3d`` 3 % -> 0.5 % (most solves converge in fewer QPs and
-    # are unaffected). None: full steps always (Algorithm 1 as printed).
-    relax_after_qps: int | None = 8
+    # direction (under-relaxation of the fixed-point iteration, which can cycle). None:
+    # full steps always (Algorithm 1 as printed, the default). Measured with 8 and 0.5
+    # (benchmarks/kd_runs.py): solves hitting j_max biped2d 16 % -> 8 %, humanoid3d flat
+    # 3 % -> 1 %, but the 20 s flat humanoid run then fell at 16.2 s (it does not without),
+    # so it stays off.
+    relax_after_qps: int | None = None
     relax_step: float = 0.5
 
     def __post_init__(self) -> None:
