@@ -16,7 +16,7 @@ import numpy as np
 
 from gaitnet_mpc.control.base import Controller, MPCStats
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
-from gaitnet_mpc.errors import QPSolveError
+from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
     GaitSchedule,
     GaitScheduleConfig,
@@ -34,6 +34,7 @@ from gaitnet_mpc.mpc.sequential import (
     SequentialKDMPC,
     SequentialResult,
 )
+from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
 from gaitnet_mpc.terrain import Course
@@ -88,6 +89,10 @@ class KDWalkConfig:
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
     # None: the centre is the commanded path itself.
     lip_anchor_max_m: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.lateral_reference not in ("line", "lip"):
+            raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
 
 
 @dataclass(frozen=True)
@@ -201,21 +206,26 @@ class KDWalkController(Controller):
             p[1] = state.foot_pos_world_m[foot][1]
         return p
 
-    def _path_start(self, state: RobotState) -> np.ndarray:
-        """Start of the reference CoM path: the measured CoM moved toward the commanded
-        path (the ramped command integrated from the start) by at most
-        ``max_path_error_m``, so that drift is corrected without a wind-up."""
+    def _commanded_path_xy(self, t_s: float) -> np.ndarray:
+        """(2,) point of the commanded CoM path at ``t_s``: the ramped command integrated
+        from the start along the current commanded heading [m]."""
         c = self.command
-        t = state.t_s - self.t0_s
+        t = t_s - self.t0_s
         v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
         t_ramp = v_max / self.config.max_accel_mps2
         travel = t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
-        yaw = self._heading(state.t_s)
+        yaw = self._heading(t_s)
         cy, sy = np.cos(yaw), np.sin(yaw)
         step = travel * np.array([cy * c.vx_mps - sy * c.vy_mps, sy * c.vx_mps + cy * c.vy_mps])
+        return self.com0[:2] + step
+
+    def _path_start(self, state: RobotState) -> np.ndarray:
+        """Start of the reference CoM path: the measured CoM moved toward the commanded
+        path by at most ``max_path_error_m``, so that drift is corrected without a
+        wind-up."""
         lim = self.config.max_path_error_m
         out = state.com_world_m.copy()
-        out[:2] += np.clip(self.com0[:2] + step - out[:2], -lim, lim)
+        out[:2] += np.clip(self._commanded_path_xy(state.t_s) - out[:2], -lim, lim)
         return out
 
     def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, tuple]:
@@ -279,7 +289,7 @@ class KDWalkController(Controller):
         tau = times - start[kk]
         T = length[kk]
         z = max(float(self.mpc.ref_workspace.com_height_m), 0.2)
-        w = np.sqrt(9.81 / z)
+        w = np.sqrt(GRAVITY_MPS2 / z)
         b = self.config.lip_half_width_m
         den = np.cosh(w * T / 2)
         y_off = side[kk] * b * (1.0 - np.cosh(w * (tau - T / 2)) / den)
@@ -288,13 +298,7 @@ class KDWalkController(Controller):
         yaw = cmd.heading_rad
         e_x = np.array([np.cos(yaw), np.sin(yaw)])
         e_y = np.array([-np.sin(yaw), np.cos(yaw)])
-        c = self.command
-        t = state.t_s - self.t0_s
-        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
-        t_ramp = v_max / self.config.max_accel_mps2
-        travel = t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
-        path = self.com0[:2] + travel * (e_x * c.vx_mps + e_y * c.vy_mps)
-        lat = float(e_y @ (path - state.com_world_m[:2]))
+        lat = float(e_y @ (self._commanded_path_xy(state.t_s) - state.com_world_m[:2]))
         lim = self.config.lip_anchor_max_m
         if lim is not None:
             lat = float(np.clip(lat, -lim, lim))
