@@ -4,6 +4,11 @@
   ``[f; m]`` acts on the foot, world-aligned, about the foot centre), plus light damping.
 * Swing legs: joint PD to the analytic IK of the swing-foot trajectory, with the joint-rate
   target from the IK of the trajectory a moment later, plus gravity compensation.
+* Optional trunk-yaw feedback on the stance hip-yaw joint (off by default): the stance foot
+  is fixed to the ground, so a hip-yaw torque ``tau`` turns the pelvis by ``-tau``;
+  ``tau += kp (psi - psi_cmd) + kd psi_dot`` holds the commanded heading. Measured with
+  ``kd`` and its LIP lateral reference (feet 0.07 m beside the CoM, flat, 0.75 m/s, dt
+  0.065, 4 s): trunk yaw rms 0.35 -> 0.10 rad with kp 10 N m/rad, kd 1 N m s/rad.
 * Arms: PD to the nominal pose with a counter-swing opposite to the hips.
 """
 
@@ -26,6 +31,8 @@ class LowLevelConfig:
     swing_kp_nm_per_rad: float = 60.0
     swing_kd_nms_per_rad: float = 2.0
     stance_kd_nms_per_rad: float = 0.3
+    stance_yaw_kp_nm_per_rad: float = 0.0  # trunk-yaw feedback on the stance hip yaw
+    stance_yaw_kd_nms_per_rad: float = 0.0
     arm_kp_nm_per_rad: float = 20.0
     arm_kd_nms_per_rad: float = 0.5
     arm_counter_swing: float = 0.6
@@ -82,6 +89,12 @@ class LowLevelController:
             idx = r.leg_joint_index[foot]
             jac = pin.getFrameJacobian(model, data, r.pin_foot_frame_ids[foot], lwa)
             tau[idx] = -(jac.T @ wrench)[r.n_root_dofs :][idx] - c.stance_kd_nms_per_rad * qdj[idx]
+            if swing_yaw_rad is not None and c.stance_yaw_kp_nm_per_rad > 0.0:
+                err = (state.base_rpy_rad[2] - swing_yaw_rad + np.pi) % (2 * np.pi) - np.pi
+                tau[idx[0]] += (  # idx[0]: hip yaw, the first leg joint
+                    c.stance_yaw_kp_nm_per_rad * err
+                    + c.stance_yaw_kd_nms_per_rad * state.base_ang_vel_world_radps[2]
+                )
         if swing_target:
             p_base, rot = r.base_pose(state.qpos)
             v_base = state.base_lin_vel_world_mps
