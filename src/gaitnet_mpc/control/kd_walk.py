@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from gaitnet_mpc.control.base import Controller, MPCStats
+from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
@@ -146,7 +147,9 @@ class KDWalkController(Controller):
     def reset(self, state: RobotState) -> None:
         self.schedule.reset(state.t_s)
         self.t0_s = state.t_s
-        self.yaw0 = float(state.base_rpy_rad[2])
+        self.profile = CommandProfile(
+            self.command, state.t_s, float(state.base_rpy_rad[2]), self.config.max_accel_mps2
+        )
         self.com0 = state.com_world_m.copy()
         self.ground_z = min(float(p[2]) for p in state.foot_pos_world_m.values())
         self.ground_z -= self.robot.spec.foot_contact_radius_m
@@ -177,12 +180,10 @@ class KDWalkController(Controller):
     # ---------------------------------------------------------------- helpers
     def _command_now(self, t_s: float) -> _RampedCommand:
         c = self.command
-        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
-        k = min(1.0, (t_s - self.t0_s) * self.config.max_accel_mps2 / v_max)
-        return _RampedCommand(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps, self._heading(t_s))
-
-    def _heading(self, t_s: float) -> float:
-        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
+        k = self.profile.ramp(t_s - self.t0_s)
+        return _RampedCommand(
+            k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps, self.profile.heading_rad(t_s)
+        )
 
     def _raibert(
         self, state: RobotState, foot: str, t_td: float, cmd: _RampedCommand
@@ -210,11 +211,8 @@ class KDWalkController(Controller):
         """(2,) point of the commanded CoM path at ``t_s``: the ramped command integrated
         from the start along the current commanded heading [m]."""
         c = self.command
-        t = t_s - self.t0_s
-        v_max = max(abs(c.vx_mps), abs(c.vy_mps), 1e-9)
-        t_ramp = v_max / self.config.max_accel_mps2
-        travel = t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
-        yaw = self._heading(t_s)
+        travel = self.profile.ramp_integral_s(t_s - self.t0_s)
+        yaw = self.profile.heading_rad(t_s)
         cy, sy = np.cos(yaw), np.sin(yaw)
         step = travel * np.array([cy * c.vx_mps - sy * c.vy_mps, sy * c.vx_mps + cy * c.vy_mps])
         return self.com0[:2] + step
@@ -327,7 +325,7 @@ class KDWalkController(Controller):
         nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
         footholds = {swing: target[None, :], stance: nxt[None, :]}
         h = timing.horizon
-        yaw = np.full((h, 2), self._heading(state.t_s))
+        yaw = np.full((h, 2), self.profile.heading_rad(state.t_s))
         yaw[:, FEET.index(stance)] = state.foot_yaw_rad[stance]
         try:
             result = self.mpc.solve(
@@ -401,5 +399,5 @@ class KDWalkController(Controller):
             )
         t = sched.time_in_step_s
         target = {swing: (self.swing.position(t), self.swing.velocity(t))}
-        yaw = None if self.robot.spec.planar else self._heading(state.t_s)
+        yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         return self.low.torques(state, wrench, target, yaw)

@@ -75,7 +75,7 @@ class SRBMWalkController(WalkingController):
         # The measured yaw lives in (-pi, pi]; the reference heading is integrated without
         # wrapping, so express the measurement within pi of it (a turn past pi would
         # otherwise show the MPC a 2 pi heading error).
-        ref = self._heading_cmd(state.t_s)
+        ref = self.profile.heading_rad(state.t_s)
         rpy[2] = ref + (rpy[2] - ref + np.pi) % (2.0 * np.pi) - np.pi
         return np.concatenate(
             [rpy, state.com_world_m, state.base_ang_vel_world_radps, state.com_vel_world_mps, [1]]
@@ -85,7 +85,7 @@ class SRBMWalkController(WalkingController):
         """(h + 1, 13) references at the stage boundaries ``stage_times`` (from now)."""
         t_now = state.t_s - self.t0_s
         yaw_rate = self.command.yaw_rate_radps
-        yaw_now = self._heading_cmd(state.t_s)
+        yaw_now = self.profile.heading_rad(state.t_s)
         x_ref = np.zeros((len(stage_times), NX))
         # Start from the commanded path, its error to the CoM clamped to avoid wind-up,
         # then integrate the commanded velocity stage by stage (exact heading per stage).
@@ -167,7 +167,7 @@ class SRBMWalkController(WalkingController):
             feet_pos[:, :, 1] = state.com_world_m[1]
         # Standing feet keep their measured heading; a foot that lands later takes the
         # commanded heading its swing is steered to.
-        yaw = np.full((h, 2), self._heading_cmd(state.t_s))
+        yaw = np.full((h, 2), self.profile.heading_rad(state.t_s))
         yaw[steps == 0, i_st] = state.foot_yaw_rad[stance_now]
         if self.landed or self.late:
             yaw[steps <= 1, i_sw] = state.foot_yaw_rad[swing_now]

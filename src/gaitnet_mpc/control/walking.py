@@ -52,6 +52,7 @@ import numpy as np
 import pinocchio as pin
 
 from gaitnet_mpc.control.base import Controller, MPCStats
+from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.gait import (
     GaitSchedule,
@@ -189,7 +190,9 @@ class WalkingController(Controller):
         self.t_prev_s = state.t_s
         self.com0 = state.com_world_m.copy()
         self.path_xy = state.com_world_m[:2].copy()
-        self.yaw0 = float(state.base_rpy_rad[2])
+        self.profile = CommandProfile(
+            self.command, state.t_s, float(state.base_rpy_rad[2]), c.max_accel_mps2
+        )
         self.z_start = float(state.com_world_m[2])
         self.z_walk = c.com_height_m or self.z_start + c.com_height_offset_m
         self.ground_z = float(min(p[2] for p in state.foot_pos_world_m.values()))
@@ -241,25 +244,16 @@ class WalkingController(Controller):
         return [(foot, self.foothold[foot].copy())]
 
     # ------------------------------------------------------------- helpers
-    def _ramp(self, t_s: float) -> float:
-        """Fraction of the command applied ``t_s`` after the start (acceleration limit)."""
-        v_max = max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
-        return min(1.0, max(t_s, 0.0) * self.config.max_accel_mps2 / v_max)
-
     def _z_ref(self, t_s: float) -> float:
         """CoM height reference at absolute time ``t_s`` (linear ramp from the start)."""
         ramp_s = self.config.com_height_ramp_s
         k = 1.0 if ramp_s <= 0.0 else min(1.0, max(t_s - self.t0_s, 0.0) / ramp_s)
         return self.z_start + k * (self.z_walk - self.z_start)
 
-    def _heading_cmd(self, t_s: float) -> float:
-        """Commanded heading [rad] at time ``t_s``: initial yaw plus integrated yaw rate."""
-        return self.yaw0 + self.command.yaw_rate_radps * (t_s - self.t0_s)
-
     def _cmd_world(self, yaw: float, t_s: float) -> np.ndarray:
         """Commanded CoM velocity (3,) in the world at time ``t_s`` after the start."""
         c, s = np.cos(yaw), np.sin(yaw)
-        k = self._ramp(t_s)
+        k = self.profile.ramp(t_s)
         vx, vy = k * self.command.vx_mps, k * self.command.vy_mps
         return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
 
@@ -268,7 +262,7 @@ class WalkingController(Controller):
         dt = state.t_s - self.t_prev_s
         self.t_prev_s = state.t_s
         if dt > 0.0:
-            v = self._cmd_world(self._heading_cmd(state.t_s), state.t_s - self.t0_s)
+            v = self._cmd_world(self.profile.heading_rad(state.t_s), state.t_s - self.t0_s)
             self.path_xy += v[:2] * dt
         err = self.path_xy - state.com_world_m[:2]
         norm = float(np.linalg.norm(err))
@@ -304,8 +298,8 @@ class WalkingController(Controller):
     ) -> np.ndarray:
         """Foothold (3,) of ``foot`` touching down at absolute time ``t_td_s`` with the CoM at
         (``p_td_xy``, ``v_td_xy``); the foot on ``p_stance`` stands until then."""
-        yaw = self._heading_cmd(t_td_s)
-        ramp = self._ramp(t_td_s - self.t0_s)
+        yaw = self.profile.heading_rad(t_td_s)
+        ramp = self.profile.ramp(t_td_s - self.t0_s)
         cmd = ramp * self.cmd_scale * np.array([self.command.vx_mps, self.command.vy_mps])
         p = self.raibert.foothold(
             foot,
@@ -354,12 +348,12 @@ class WalkingController(Controller):
         swing; ``self.aim[foot]`` is where its swing was aimed)."""
         aim = self.aim.pop(foot, None)
         if aim is not None:
-            yaw = self._heading_cmd(state.t_s)
+            yaw = self.profile.heading_rad(state.t_s)
             self.landing.measure(foot, state.foot_pos_world_m[foot], aim, yaw)
 
     def _swing_target(self, foot: str, foothold: np.ndarray, t_s: float) -> np.ndarray:
         """Where to aim the swing foot so that it lands on ``foothold`` (bias removed)."""
-        return self.landing.aim(foot, foothold, self._heading_cmd(t_s))
+        return self.landing.aim(foot, foothold, self.profile.heading_rad(t_s))
 
     def _start_swing(self, state: RobotState) -> None:
         """Plan the swing foot's foothold and a swing over the time left in the step."""
@@ -492,7 +486,7 @@ class WalkingController(Controller):
         elif not self.landed and self.swing is not None:
             t_swing = sched.time_in_step_s - self.swing_t0_s
             target[swing] = (self.swing.position(t_swing), self.swing.velocity(t_swing))
-        yaw = None if self.robot.spec.planar else self._heading_cmd(state.t_s)
+        yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         tau = self.low.torques(state, wrench, target, yaw)
         if self.config.stance_gravity_ff and wrench:
             r = self.robot

@@ -1,0 +1,47 @@
+"""The velocity command as walking controllers follow it over time.
+
+The command ``(vx, vy)`` (heading frame) is ramped up from rest at a bounded acceleration,
+``k(t) = min(1, a t / max(|vx|, |vy|))`` of it applied ``t`` after the start, and the
+commanded heading is the initial yaw plus the integrated yaw rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class CommandProfile:
+    """Ramped velocity command and commanded heading of one episode.
+
+    Attributes:
+        command: object with ``vx_mps``, ``vy_mps``, ``yaw_rate_radps``.
+        t0_s: start time of the episode [s].
+        yaw0_rad: measured heading at the start [rad].
+        max_accel_mps2: the command is ramped up from rest at this rate [m/s^2].
+    """
+
+    command: Any
+    t0_s: float
+    yaw0_rad: float
+    max_accel_mps2: float
+
+    @property
+    def _v_max_mps(self) -> float:
+        return max(abs(self.command.vx_mps), abs(self.command.vy_mps), 1e-9)
+
+    def ramp(self, t_since_start_s: float) -> float:
+        """Fraction ``k`` of the command applied ``t_since_start_s`` after the start [-]."""
+        return min(1.0, max(t_since_start_s, 0.0) * self.max_accel_mps2 / self._v_max_mps)
+
+    def ramp_integral_s(self, t_since_start_s: float) -> float:
+        """``int_0^t k dt`` [s]: the distance covered along a fixed commanded velocity
+        ``v`` by then is ``v`` times this."""
+        t = t_since_start_s
+        t_ramp = self._v_max_mps / self.max_accel_mps2
+        return t * t / (2 * t_ramp) if t < t_ramp else t - t_ramp / 2
+
+    def heading_rad(self, t_s: float) -> float:
+        """Commanded heading [rad] at (absolute) time ``t_s``."""
+        return self.yaw0_rad + self.command.yaw_rate_radps * (t_s - self.t0_s)
