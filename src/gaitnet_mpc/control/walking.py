@@ -161,8 +161,7 @@ class WalkingController(Controller):
     """Gait schedule + LIP/Raibert footholds + swing + low-level control around an MPC.
 
     Subclasses build their MPC, implement :meth:`_replan` (which sets the stance wrenches
-    returned by :meth:`_wrenches_now`) and may override :meth:`_step_dt` (the sampling
-    time of a step that starts) and :meth:`_update_foothold`.
+    returned by :meth:`_wrenches_now`) and may override :meth:`_update_foothold`.
     """
 
     def __init__(
@@ -197,25 +196,8 @@ class WalkingController(Controller):
         self.z_walk = c.com_height_m or self.z_start + c.com_height_offset_m
         self.ground_z = float(min(p[2] for p in state.foot_pos_world_m.values()))
         self.ground_z -= self.robot.spec.foot_contact_radius_m
-        self._set_step_time(self.schedule.config.stages_per_step * c.dt_s)
-        self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
-        self.foothold = dict(self.foot_pos)
-        self.swing: SwingTrajectory | None = None
-        self.landed = False  # the swing foot touched down early (stance for the rest)
-        self.late = False  # the stance foot has not touched down yet (the other stands)
-        self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
-        self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
-        self.landing = LandingBias(
-            c.landing_bias_gain, c.landing_bias_max_m, planar=self.robot.spec.planar
-        )
-        self.step_seen = -1
-        self.next_replan_s = -np.inf
-
-    def _set_step_time(self, step_s: float) -> None:
-        """LIP gains and the Raibert heuristic for steps lasting ``step_s`` [s]."""
-        c = self.config
         planar = self.robot.spec.planar
-        self.step_time_s = step_s
+        step_s = self.schedule.config.stages_per_step * c.dt_s
         self.omega, k_v, lateral, self.cmd_scale = lip_gains(
             self.z_walk - self.ground_z, step_s, c.stance_half_width_m
         )
@@ -228,6 +210,18 @@ class WalkingController(Controller):
                 max_lateral_separation_m=0.0 if planar else c.max_lateral_separation_m,
             )
         )
+        self.foot_pos = {f: state.foot_pos_world_m[f].copy() for f in FEET}
+        self.foothold = dict(self.foot_pos)
+        self.swing: SwingTrajectory | None = None
+        self.landed = False  # the swing foot touched down early (stance for the rest)
+        self.late = False  # the stance foot has not touched down yet (the other stands)
+        self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
+        self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
+        self.landing = LandingBias(
+            c.landing_bias_gain, c.landing_bias_max_m, planar=self.robot.spec.planar
+        )
+        self.step_seen = -1
+        self.next_replan_s = -np.inf
 
     @property
     def mpc_stats(self) -> MPCStats:
@@ -380,12 +374,7 @@ class WalkingController(Controller):
     def _on_step_start(self, state: RobotState) -> None:
         sched = self.schedule
         stance = sched.stance_foot
-        dt = sched.clip_dt(self._step_dt(state))
-        sched.set_step_dt(dt)
-        step_s = sched.current_step_duration_s
-        if step_s != self.step_time_s:
-            self._set_step_time(step_s)
-        self._steps.append(step_s)
+        self._steps.append(sched.current_step_duration_s)
         self.landed = False
         self.late = sched.step_index > 0 and not state.foot_contact[stance]
         self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
@@ -428,10 +417,6 @@ class WalkingController(Controller):
             self.aim[foot] = target
 
     # ------------------------------------------------------------- the MPC
-    def _step_dt(self, state: RobotState) -> float:
-        """MPC sampling time [s] of the step starting now (fixed: ``config.dt_s``)."""
-        return self.config.dt_s
-
     @abstractmethod
     def _replan(self, state: RobotState) -> None:
         """Solve the MPC from ``state`` (sets what :meth:`_wrenches_now` returns)."""
