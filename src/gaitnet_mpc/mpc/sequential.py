@@ -238,6 +238,7 @@ class SequentialKDMPC:
         pf_ref = mpc_foot_reference(ref, contact)
         p_com_ref = ref.p_com_ref  # f_ref's CoM path; line 9 updates x_ref and p_f_ref only
         h_lin_ref, pose_lin_ref = ref.h_ref[:, :3].copy(), ref.H_ref[:, :3].copy()
+        h_ref, pose_ref = ref.h_ref, ref.H_ref
         if com_reference is not None:
             pc_override = np.asarray(com_reference[0], dtype=float)
             vc_override = np.asarray(com_reference[1], dtype=float)
@@ -247,8 +248,6 @@ class SequentialKDMPC:
             h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
             pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
         iterate = KDIterate.initial(com0, p_com_ref, pf_ref, contact, mass)
-        if com_reference is None:
-            h_ref, pose_ref = ref.h_ref, ref.H_ref
         step: KDStep | None = None
         converged = False
         n_qps = 0
