@@ -210,16 +210,18 @@ class QPProblem:
         return max(worst, 0.0)
 
     # ---------------------------------------------------------- conversions
-    def to_osqp_form(self) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray]:
+    def to_osqp_form(
+        self, include_box: bool = True
+    ) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray]:
         """Stack every constraint as ``l_all <= A_all x <= u_all``.
 
-        Row order: equality rows (``l = u = b_eq``), then inequality rows, then one
-        identity row per variable when a box is given (all ``n`` rows, infinite
-        sides kept, so the pattern does not depend on which bounds are finite).
+        Row order: equality rows (``l = u = b_eq``), then inequality rows, then, with
+        ``include_box`` and a box given, one identity row per variable (all ``n`` rows,
+        infinite sides kept, so the pattern does not depend on which bounds are finite).
 
         Returns:
             ``(A_all, l_all, u_all)`` with ``A_all`` a canonical CSC of shape
-            ``(m_eq + m_ineq + n_box, n)``.
+            ``(m_eq + m_ineq + n_box, n)`` (``n_box = 0`` without ``include_box``).
         """
         n = self.n
         blocks: list[sp.csc_matrix] = []
@@ -234,7 +236,7 @@ class QPProblem:
             blocks.append(self.A)
             lows.append(l)
             ups.append(u)
-        if self.has_box:
+        if include_box and self.has_box:
             lb, ub = self.box_bounds()
             blocks.append(sp.identity(n, format="csc"))
             lows.append(lb)

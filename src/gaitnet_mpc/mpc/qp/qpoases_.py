@@ -27,11 +27,10 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.sparse as sp
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.mpc.qp.problem import QPProblem
-from gaitnet_mpc.mpc.qp.structure import SparsityPattern, canonical_csc
+from gaitnet_mpc.mpc.qp.structure import SparsityPattern
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 
 try:
@@ -126,27 +125,7 @@ class QpoasesWorkspace(QPWorkspace):
         self._invalidate_structure()
 
     def _solve(self, problem: QPProblem, warm_start: np.ndarray | None) -> BackendResult:
-        n = problem.n
-        blocks: list[sp.csc_matrix] = []
-        lows: list[np.ndarray] = []
-        ups: list[np.ndarray] = []
-        if problem.A_eq is not None:
-            blocks.append(problem.A_eq)
-            lows.append(problem.b_eq)
-            ups.append(problem.b_eq)
-        if problem.A is not None:
-            l, u = problem.ineq_bounds()
-            blocks.append(problem.A)
-            lows.append(l)
-            ups.append(u)
-        if len(blocks) > 1:
-            A = canonical_csc(sp.vstack(blocks, format="csc"))
-        elif blocks:
-            A = blocks[0]
-        else:
-            A = sp.csc_matrix((0, n))
-        lba = np.concatenate(lows) if lows else np.zeros(0)
-        uba = np.concatenate(ups) if ups else np.zeros(0)
+        A, lba, uba = problem.to_osqp_form(include_box=False)  # boxes go to lbx, ubx
         lbx, ubx = problem.box_bounds()
         P = problem.P
 
