@@ -1,9 +1,8 @@
 """dump one full solve's plan after T seconds of flat walking: python dump_plan.py DT T '{overrides}'"""
 import json, sys
 import numpy as np
-sys.path.insert(0, "/tmp/lat_notes")
-from dataclasses import replace
-from gaitnet_mpc.control.kd_walk import KDWalkController, KDWalkConfig
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from overrides import kd_config
 from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import load_robot, FEET
 from gaitnet_mpc.sim.episode import Command, run_episode
@@ -11,14 +10,8 @@ from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 dt, T = float(sys.argv[1]), float(sys.argv[2])
 ov = json.loads(sys.argv[3]) if len(sys.argv) > 3 else {}
-def deep(obj, d):
-    kw = {}
-    for k, v in d.items():
-        cur = getattr(obj, k)
-        kw[k] = deep(cur, v) if isinstance(v, dict) else (tuple(v) if isinstance(v, list) else v)
-    return replace(obj, **kw)
 robot = load_robot("humanoid3d"); course = load_course("flat"); cmd = Command(vx_mps=0.75)
-ctrl = KDWalkController(robot, course, cmd, dt_policy=FixedDt(dt), config=deep(KDWalkConfig(), ov))
+ctrl = KDWalkController(robot, course, cmd, dt_policy=FixedDt(dt), config=kd_config(ov))
 dumps = []
 orig = ctrl._solve
 def spy(state, full):

@@ -1,7 +1,7 @@
 """usage: runkd.py COURSE DT DURATION '{json overrides of KDWalkConfig}' [robot] [vx]"""
 import json, sys
-from dataclasses import replace
-from gaitnet_mpc.control.kd_walk import KDWalkController, KDWalkConfig
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from overrides import kd_config
 from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.episode import Command, run_episode
@@ -12,14 +12,7 @@ ov = json.loads(sys.argv[4]) if len(sys.argv) > 4 else {}
 robot = load_robot(sys.argv[5] if len(sys.argv) > 5 else "humanoid3d")
 vx = float(sys.argv[6]) if len(sys.argv) > 6 else 0.75
 course = load_course(course_name); cmd = Command(vx_mps=vx)
-from gaitnet_mpc.gait import SwingConfig
-def deep(obj, d):
-    kw = {}
-    for k, v in d.items():
-        cur = getattr(obj, k)
-        kw[k] = deep(cur, v) if isinstance(v, dict) else (tuple(v) if isinstance(v, list) else v)
-    return replace(obj, **kw)
-cfg = deep(KDWalkConfig(), dict(ov))
+cfg = kd_config(ov)
 ctrl = KDWalkController(robot, course, cmd, dt_policy=FixedDt(dt), config=cfg)
 s = run_episode(Simulator(robot, course), ctrl, cmd, dur, progress=False)
 bad = [(f['foot'][0], f['pos_m'][:2]) for f in s['footholds'] if not f['allowed']]

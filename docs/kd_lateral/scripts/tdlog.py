@@ -1,8 +1,8 @@
 """per-touchdown log: python tdlog.py COURSE DT T '{overrides}'"""
 import json, sys
 import numpy as np
-from dataclasses import replace
-from gaitnet_mpc.control.kd_walk import KDWalkController, KDWalkConfig
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from overrides import kd_config
 from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.episode import Command
@@ -10,14 +10,8 @@ from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 crs, dt, T = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 ov = json.loads(sys.argv[4]) if len(sys.argv) > 4 else {}
-def deep(obj, d):
-    kw = {}
-    for k, v in d.items():
-        cur = getattr(obj, k)
-        kw[k] = deep(cur, v) if isinstance(v, dict) else (tuple(v) if isinstance(v, list) else v)
-    return replace(obj, **kw)
 robot = load_robot("humanoid3d"); course = load_course(crs)
-ctrl = KDWalkController(robot, course, Command(0.75, 0, 0), dt_policy=FixedDt(dt), config=deep(KDWalkConfig(), ov))
+ctrl = KDWalkController(robot, course, Command(0.75, 0, 0), dt_policy=FixedDt(dt), config=kd_config(ov))
 bnds = {}
 ob = ctrl._bounds
 def bspy(state, foot, nominal):

@@ -1,7 +1,7 @@
 import json, sys
 import numpy as np
-from dataclasses import replace
-from gaitnet_mpc.control.kd_walk import KDWalkController, KDWalkConfig
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from overrides import kd_config
 from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.episode import Command
@@ -10,7 +10,7 @@ from gaitnet_mpc.terrain import load_course
 crs, dt, T = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 ov = json.loads(sys.argv[4]) if len(sys.argv) > 4 else {}
 robot = load_robot("humanoid3d"); course = load_course(crs)
-ctrl = KDWalkController(robot, course, Command(0.75, 0, 0), dt_policy=FixedDt(dt), config=replace(KDWalkConfig(), **ov))
+ctrl = KDWalkController(robot, course, Command(0.75, 0, 0), dt_policy=FixedDt(dt), config=kd_config(ov))
 sim = Simulator(robot, course); st = sim.state(); ctrl.reset(st)
 rpy = []
 while st.t_s < T:
