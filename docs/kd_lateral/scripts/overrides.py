@@ -15,3 +15,16 @@ def deep_replace(obj, overrides):
 
 def kd_config(overrides):
     return deep_replace(KDWalkConfig(), dict(overrides))
+
+
+def kd_setup(course_name, dt, overrides, robot_name="humanoid3d", vx=0.75):
+    """(robot, course, command, KDWalkController) with a fixed dt and the overrides."""
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.mpc.sequential import FixedDt
+    from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.sim.episode import Command
+    from gaitnet_mpc.terrain import load_course
+
+    robot, course, cmd = load_robot(robot_name), load_course(course_name), Command(vx_mps=vx)
+    ctrl = KDWalkController(robot, course, cmd, dt_policy=FixedDt(dt), config=kd_config(overrides))
+    return robot, course, cmd, ctrl

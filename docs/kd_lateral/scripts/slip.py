@@ -1,17 +1,11 @@
 """stance-foot travel and yaw change per stance (after 1 s): python slip.py COURSE DT T '{overrides}'"""
 import json, sys
 import numpy as np
-from gaitnet_mpc.control.kd_walk import KDWalkController
-from overrides import kd_config
-from gaitnet_mpc.mpc.sequential import FixedDt
-from gaitnet_mpc.robots import load_robot
-from gaitnet_mpc.sim.episode import Command
+from overrides import kd_setup
 from gaitnet_mpc.sim.simulator import Simulator
-from gaitnet_mpc.terrain import load_course
 crs, dt, T = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 ov = json.loads(sys.argv[4]) if len(sys.argv) > 4 else {}
-robot = load_robot("humanoid3d"); course = load_course(crs)
-ctrl = KDWalkController(robot, course, Command(0.75, 0, 0), dt_policy=FixedDt(dt), config=kd_config(ov))
+robot, course, _, ctrl = kd_setup(crs, dt, ov)
 sim = Simulator(robot, course); st = sim.state(); ctrl.reset(st)
 start = None; last = -1; rows = []
 while st.t_s < T:

@@ -87,7 +87,7 @@ class KDWalkConfig:
     sequential: SequentialConfig = field(
         default_factory=lambda: SequentialConfig(kd=walking_kd_config())
     )
-    low_level: LowLevelConfig = field(default_factory=lambda: walking_low_level_config())
+    low_level: LowLevelConfig = field(default_factory=walking_low_level_config)
     swing: SwingConfig = field(
         default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
     )
