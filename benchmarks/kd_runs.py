@@ -15,32 +15,39 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
 
-# (label, robot, course, vx [m/s], fixed dt [s], duration [s])
-SCENARIOS: tuple[tuple[str, str, str, float, float, float], ...] = (
-    ("flat 0.75 m/s", "humanoid3d", "flat", 0.75, 0.045, 20.0),
-    ("gap 0.20 m, dt 0.045", "humanoid3d", "gap", 0.75, 0.045, 6.0),
-    ("gap 0.20 m, dt 0.055", "humanoid3d", "gap", 0.75, 0.055, 6.0),
-    ("gap 0.20 m, dt 0.065", "humanoid3d", "gap", 0.75, 0.065, 6.0),
-    ("stepping-stones, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0),
-    ("stepping-stones, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0),
-    ("stepping-stones, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0),
-    ("biped2d flat 0.5 m/s", "biped2d", "flat", 0.5, 0.045, 20.0),
+# (label, robot, course, vx [m/s], fixed dt [s], duration [s], multi-step preview)
+Scenario = tuple[str, str, str, float, float, float, bool]
+SCENARIOS: tuple[Scenario, ...] = (
+    ("flat 0.75 m/s", "humanoid3d", "flat", 0.75, 0.045, 20.0, False),
+    ("gap 0.20 m, dt 0.045", "humanoid3d", "gap", 0.75, 0.045, 6.0, False),
+    ("gap 0.20 m, dt 0.055", "humanoid3d", "gap", 0.75, 0.055, 6.0, False),
+    ("gap 0.20 m, dt 0.065", "humanoid3d", "gap", 0.75, 0.065, 6.0, False),
+    ("stepping-stones, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0, False),
+    ("stepping-stones, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, False),
+    ("stepping-stones, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, False),
+    ("stones --preview, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0, True),
+    ("stones --preview, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, True),
+    ("stones --preview, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, True),
+    ("flat 0.75 m/s --preview", "humanoid3d", "flat", 0.75, 0.045, 20.0, True),
+    ("biped2d flat 0.5 m/s", "biped2d", "flat", 0.5, 0.045, 20.0, False),
 )
 
 
-def run(scenario: tuple[str, str, str, float, float, float]) -> dict:
-    from gaitnet_mpc.control.kd_walk import KDWalkController
+def run(scenario: Scenario) -> dict:
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController
+    from gaitnet_mpc.gait.preview import PreviewConfig
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.episode import Command, run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
-    label, robot_name, course_name, vx, dt, duration = scenario
+    label, robot_name, course_name, vx, dt, duration, preview = scenario
     robot = load_robot(robot_name)
     course = load_course(course_name)
     command = Command(vx_mps=vx)
-    ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt))
+    config = KDWalkConfig(preview=PreviewConfig() if preview else None)
+    ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt), config=config)
     summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
     return {"label": label, **summary}
 
@@ -56,10 +63,10 @@ def main() -> None:
         "",
         machine_info(("numpy", "mujoco", "pin", "piqp")),
         "",
-        "| scenario | fell | fall t [s] | distance [m] | speed RMSE [m/s] | touchdowns | "
-        "violations | QPs/full solve | QPs/replan | full ms (median) | replan ms (median) | "
-        "hit j_max | RTF |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| scenario | fell | fall t [s] | distance [m] | speed RMSE [m/s] | lateral drift [m] | "
+        "touchdowns | violations | QPs/full solve | QPs/replan | full ms (median) | "
+        "replan ms (median) | hit j_max | RTF |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         m = r["mpc"]
@@ -69,7 +76,8 @@ def main() -> None:
         lines.append(
             f"| {r['label']} | {'yes' if r['fell'] else 'no'} | "
             f"{fall_t} | {r['distance_m']:.2f} | "
-            f"{rmse:.3f} | {len(r['footholds'])} | {r['foothold_violations']} | "
+            f"{rmse:.3f} | {r['lateral_drift_m']:+.2f} | {len(r['footholds'])} | "
+            f"{r['foothold_violations']} | "
             f"{m.get('qps_per_full_mean', float('nan')):.1f} | "
             f"{m.get('qps_per_replan_mean', float('nan')):.1f} | "
             f"{m.get('full_ms_median', float('nan')):.0f} | "
@@ -79,7 +87,7 @@ def main() -> None:
     lines += [
         "",
         "Commands: the same scenario with the CLI is `gaitnet-mpc run --controller kd "
-        "--robot ROBOT --course COURSE --vx VX --dt DT --duration T`.",
+        "--robot ROBOT --course COURSE --vx VX --dt DT --duration T [--preview]`.",
         "",
         "Solve times and RTF are wall times on a shared machine and move with its load; "
         "`results/kd_solve.md` compares solver versions in one interleaved run.",

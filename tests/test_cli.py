@@ -85,6 +85,7 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         (["--duration", "-1"], "--duration: got -1.0"),
         (["--vx", "9"], "--vx: got 9.0"),
         (["--payload-kg", "-2"], "payload_kg: got -2.0"),
+        (["--controller", "srbm", "--preview"], "--preview: got 'srbm', expected the kd"),
     ],
 )
 def test_bad_input_fails_fast_with_the_field(
@@ -139,3 +140,15 @@ def test_subcommands_parse() -> None:
     assert args.no_plots and args.viewer
     with pytest.raises(SystemExit):
         parser.parse_args(["compare"])  # at least one run folder
+
+
+def test_kd_preview_run_records_its_options(tmp_path: Path) -> None:
+    """`--preview` builds kd with the footstep preview, walks, and is recorded in the run."""
+    out = tmp_path / "pv"
+    argv = ["run", "--controller", "kd", "--preview", "--course", "stepping-stones"]
+    argv += ["--vx", "0.5", "--dt", "0.055", "--duration", "0.6"]
+    rc = main([*argv, "--no-video", "--no-plots", "--no-progress", "--out", str(out)])
+    assert rc == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller_options"] == {"dt_s": 0.055, "preview": True}
+    assert not summary["fell"]

@@ -110,6 +110,41 @@ def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
     assert np.all(np.abs(np.diff(ref_p[:, 1])) < 0.03)
 
 
+def test_preview_sets_the_touchdown_patch_and_the_com_path(humanoid) -> None:
+    """With the multi-step preview, the next touchdown's patch is the plan's, one the swing
+    foot may use, and the MPC's touchdown stays in that patch's box (eq. 24) while the
+    robot walks onto the first stone."""
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+    from gaitnet_mpc.gait.preview import PreviewConfig
+    from gaitnet_mpc.mpc.sequential import FixedDt
+
+    course = load_course("stepping-stones")
+    command = Command(vx_mps=0.75)
+    sim = Simulator(humanoid, course)
+    cfg = KDWalkConfig(preview=PreviewConfig())
+    ctrl = KDWalkController(humanoid, course, command, dt_policy=FixedDt(0.055), config=cfg)
+    state = sim.state()
+    ctrl.reset(state)
+    checked = 0
+    while state.t_s < 2.2:
+        sim.step(ctrl.compute(state))
+        state = sim.state()
+        plan, swing = ctrl.preview, ctrl.schedule.swing_foot
+        if plan is None or ctrl.plan is None or ctrl.schedule.phase_in_step > 0.5:
+            continue
+        patch = course.patches[plan.patch[1]]
+        assert patch.allows(swing) and plan.feet[1] == swing
+        lo, hi = patch.foothold_box(ctrl.config.foothold_margin_m, 0.03)
+        td = ctrl.plan.touchdown(swing)
+        assert np.all(td[:2] >= lo[:2] - 1e-4) and np.all(td[:2] <= hi[:2] + 1e-4)
+        checked += 1
+    assert not sim.fall.fell
+    assert checked > 20
+    assert state.com_world_m[0] > 0.9  # reached the first stone
+    kinds = {course.patches[j].feet for j in ctrl.preview.patch[1:]}
+    assert kinds & {"left", "right"}  # the plan already looks into the one-foot lanes
+
+
 def test_sequential_config_rejects_bad_relaxation() -> None:
     from gaitnet_mpc.errors import ConfigError
     from gaitnet_mpc.mpc.sequential import SequentialConfig

@@ -38,6 +38,12 @@ def _build_parser() -> argparse.ArgumentParser:
         "--dt", type=float, default=None, help="fixed MPC sampling time [s] (step = 5 dt)"
     )
     run.add_argument(
+        "--preview",
+        action="store_true",
+        help="kd only: choose patches and the CoM path with a multi-step LIP footstep plan "
+        "(gait/preview.py) instead of the one-step preview",
+    )
+    run.add_argument(
         "--push",
         action="append",
         default=[],
@@ -149,6 +155,10 @@ def _run(args: argparse.Namespace) -> int:
         if not (0.03 <= args.dt <= 0.2):
             raise ConfigError("--dt", args.dt, "a sampling time in [0.03, 0.2] s")
         options["dt_s"] = args.dt
+    if args.preview:
+        if args.controller != "kd":
+            raise ConfigError("--preview", args.controller, "the kd controller")
+        options["preview"] = True
     controller = make_controller(
         args.controller, ControllerContext(robot, course, command, options)
     )
@@ -157,6 +167,7 @@ def _run(args: argparse.Namespace) -> int:
     meta = {
         "robot": robot.name,
         "controller": args.controller,
+        "controller_options": options,
         "course": course.name,
         "command": command.to_dict(),
         "pushes": [

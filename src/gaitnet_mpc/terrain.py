@@ -194,6 +194,17 @@ class Patch:
     def x_center_m(self) -> float:
         return 0.5 * (self.x_min + self.x_max)
 
+    def foothold_box(
+        self, margin_x_m: float, margin_y_m: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. (24) box ``(p_min (3,), p_max (3,))`` of a foot centre kept ``margin_x_m``
+        (``margin_y_m``, default the same) inside the patch (its centre line where the
+        patch is narrower than twice that); z is the patch top."""
+        margin_y_m = margin_x_m if margin_y_m is None else margin_y_m
+        x_lo, x_hi = _shrink(self.x_min, self.x_max, margin_x_m)
+        y_lo, y_hi = _shrink(self.y_min, self.y_max, margin_y_m)
+        return np.array([x_lo, y_lo, self.z_top_m]), np.array([x_hi, y_hi, self.z_top_m])
+
     @property
     def y_center_m(self) -> float:
         return 0.5 * (self.y_min + self.y_max)

@@ -9,6 +9,10 @@ def deep_replace(obj, overrides):
     kw = {}
     for k, v in overrides.items():
         cur = getattr(obj, k)
+        if cur is None and k == "preview":
+            from gaitnet_mpc.gait.preview import PreviewConfig
+
+            cur = PreviewConfig()
         kw[k] = deep_replace(cur, v) if isinstance(v, dict) else (tuple(v) if isinstance(v, list) else v)
     return replace(obj, **kw)
 

@@ -5,7 +5,9 @@ sampling time and the full sequential solve runs (Algorithm 1, up to ``j_max`` Q
 during the step the same dt is kept and the MPC replans every ``replan_period_s`` (at
 least once per stage, Remark 4). The footholds the MPC chooses are the swing targets of
 the low-level controller; the next touchdown is bounded by the one-step terrain preview
-(eq. 24).
+(eq. 24). With ``KDWalkConfig.preview`` set, the patch of that touchdown and the CoM path
+along the course come instead from a multi-step LIP footstep plan made at each step start
+(:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from gaitnet_mpc.gait import (
     SwingConfig,
     SwingTrajectory,
 )
+from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
 from gaitnet_mpc.mpc.sequential import (
@@ -111,6 +114,10 @@ class KDWalkConfig:
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
     # None: the centre is the commanded path itself.
     lip_anchor_max_m: float | None = None
+    # Multi-step footstep preview (gait/preview.py): at each step start a sagittal LIP plan
+    # of the next steps chooses the swing foot's patch (eq. 24 box) and its touchdown x
+    # and gives the CoM x reference of eq. 18. None: one-step preview (patch by reach).
+    preview: PreviewConfig | None = None
 
     def __post_init__(self) -> None:
         if self.lateral_reference not in ("line", "lip"):
@@ -179,6 +186,8 @@ class KDWalkController(Controller):
         self.plan: SequentialResult | None = None
         self.next_replan_s = -np.inf
         self._started_step = -1
+        self.preview: PreviewPlan | None = None
+        self._preview_t0_s = 0.0
 
     @property
     def mpc_stats(self) -> MPCStats:
@@ -248,21 +257,26 @@ class KDWalkController(Controller):
         return out
 
     def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, tuple]:
-        """Eq. 24 box for the swing foot's next touchdown (one-step preview).
+        """Eq. 24 box for the swing foot's next touchdown.
 
-        The patch is chosen by kinematic reach from the CoM predicted at touchdown
+        With a preview plan, the box of the patch it chose. Otherwise (one-step preview)
+        the patch is chosen by kinematic reach from the CoM predicted at touchdown
         (current CoM plus its velocity times the time left in the step), preferring the
         patch nearest the nominal (heuristic) foothold: :meth:`Course.reachable_foothold_bounds`.
         """
-        t_left = self.schedule.time_left_in_step_s
-        p_td = state.com_world_m[:2] + state.com_vel_world_mps[:2] * t_left
-        lo, hi, _ = self.course.reachable_foothold_bounds(
-            p_td,
-            foot,
-            nominal[:2],
-            reach_x_m=self.config.foothold_reach_m,
-            margin_m=self.config.foothold_margin_m,
-        )
+        if self.preview is not None:
+            patch = self.course.patches[self.preview.patch[1]]
+            lo, hi = patch.foothold_box(*self._margins)
+        else:
+            t_left = self.schedule.time_left_in_step_s
+            p_td = state.com_world_m[:2] + state.com_vel_world_mps[:2] * t_left
+            lo, hi, _ = self.course.reachable_foothold_bounds(
+                p_td,
+                foot,
+                nominal[:2],
+                reach_x_m=self.config.foothold_reach_m,
+                margin_m=self.config.foothold_margin_m,
+            )
         r = self.robot.spec.foot_contact_radius_m
         lo, hi = lo.copy(), hi.copy()
         lo[2] += r
@@ -329,6 +343,68 @@ class KDWalkController(Controller):
         v[:, :2] = v_cmd + v_off[:, None] * e_y
         return p, v
 
+    def _plan_preview(self, state: RobotState, cmd: _RampedCommand, first_step: bool) -> None:
+        """Multi-step LIP footstep plan from now (None if off, planar, or without a
+        solution: then the one-step preview applies). Within a step (``first_step``
+        False) the patch of the next touchdown stays the one chosen at the step start."""
+        cfg = self.config.preview
+        if cfg is None or self.robot.spec.planar:
+            return
+        sched = self.schedule
+        stance = sched.stance_foot
+        keep = None if first_step or self.preview is None else self.preview.patch[1]
+        plan = plan_preview(
+            self.course,
+            cfg,
+            com_m=state.com_world_m[:2],
+            com_v_mps=state.com_vel_world_mps[:2],
+            com_height_m=self.mpc.ref_workspace.com_height_m,
+            stance_foot=stance,
+            stance_m=state.foot_pos_world_m[stance][:2],
+            liftoff_m=self.liftoff[sched.swing_foot][:2],
+            time_left_s=max(sched.time_left_in_step_s, 1e-3),
+            dt_s=sched.current_step_dt_s,
+            v_cmd_mps=cmd.vx_mps,
+            y_path_m=float(self._commanded_path_xy(state.t_s)[1]),
+            margin_m=self._margins,
+            first_patch=keep,
+        )
+        if plan is not None or first_step:
+            self.preview = plan
+            self._preview_t0_s = state.t_s
+
+    @property
+    def _margins(self) -> tuple[float, float]:
+        """(x, y) foothold margins inside a patch with the preview [m]."""
+        c = self.config
+        return c.foothold_margin_m, c.preview.foothold_margin_y_m if c.preview else 0.0
+
+    def _on_preview(self, p: np.ndarray, step: int) -> np.ndarray:
+        """``p`` (a heuristic foothold) with x from the preview's foothold of ``step`` (1 =
+        the next touchdown), y clipped into its patch's box and z on the patch."""
+        plan = self.preview
+        assert plan is not None
+        lo, hi = self.course.patches[plan.patch[step]].foothold_box(*self._margins)
+        out = np.clip(p, lo, hi)
+        out[0] = plan.foothold_m[step, 0]
+        out[2] = lo[2] + self.robot.spec.foot_contact_radius_m
+        return out
+
+    def _com_reference(
+        self, state: RobotState, timing: ReferenceTiming, cmd: _RampedCommand
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """CoM path and velocity (h+1, 3) that replace f_ref's where not NaN: the LIP sway
+        orbit laterally (``lateral_reference="lip"``) and the preview plan's CoM along x."""
+        ref = self._lip_reference(state, timing, cmd)
+        if self.preview is None:
+            return ref
+        if ref is None:
+            shape = (timing.times_s.size, 3)
+            ref = (np.full(shape, np.nan), np.full(shape, np.nan))
+        pos, vel = self.preview.com_at(timing.times_s + (state.t_s - self._preview_t0_s))
+        ref[0][:, 0], ref[1][:, 0] = pos[:, 0], vel[:, 0]
+        return ref
+
     # ---------------------------------------------------------------- planning
     def _solve(self, state: RobotState, full: bool) -> None:
         sched = self.schedule
@@ -337,13 +413,19 @@ class KDWalkController(Controller):
         timing = ReferenceTiming.from_horizon(sched.horizon())
         swing, stance = sched.swing_foot, sched.stance_foot
         t_left = sched.time_left_in_step_s
+        if not full and self.config.preview is not None and self.config.preview.every_solve:
+            self._plan_preview(state, cmd, first_step=False)
         if full or self.plan is None:
             target = self._raibert(state, swing, t_left, cmd)
+            if self.preview is not None:
+                target = self._on_preview(target, 1)
         else:
             target = self.plan.touchdown(swing)
             if target is None:
                 target = self._raibert(state, swing, t_left, cmd)
         nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
+        if self.preview is not None:
+            nxt = self._on_preview(nxt, 2)
         footholds = {swing: target[None, :], stance: nxt[None, :]}
         h = timing.horizon
         yaw = np.full((h, 2), self.profile.heading_rad(state.t_s))
@@ -361,7 +443,7 @@ class KDWalkController(Controller):
                 foothold_bounds=self._bounds(state, swing, target),
                 j_max=None if full else self.config.replan_j_max,
                 p_com_start_m=self._path_start(state),
-                com_reference=self._lip_reference(state, timing, cmd),
+                com_reference=self._com_reference(state, timing, cmd),
             )
         except QPSolveError:
             self._stats.record(0.0, 1, False, full)
@@ -387,6 +469,9 @@ class KDWalkController(Controller):
         self.liftoff[swing] = state.foot_pos_world_m[swing].copy()
         cmd = self._command_now(state.t_s)
         target = self._raibert(state, swing, sched.current_step_duration_s, cmd)
+        self._plan_preview(state, cmd, first_step=True)
+        if self.preview is not None:
+            target = self._on_preview(target, 1)
         obstacles = self.course.obstacles_between(
             min(self.liftoff[swing][0], target[0]) - 0.1,
             max(self.liftoff[swing][0], target[0]) + 0.2,
