@@ -194,6 +194,10 @@ class Patch:
     def x_center_m(self) -> float:
         return 0.5 * (self.x_min + self.x_max)
 
+    @property
+    def y_center_m(self) -> float:
+        return 0.5 * (self.y_min + self.y_max)
+
     def foothold_box(
         self, margin_x_m: float, margin_y_m: float | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -204,10 +208,6 @@ class Patch:
         x_lo, x_hi = _shrink(self.x_min, self.x_max, margin_x_m)
         y_lo, y_hi = _shrink(self.y_min, self.y_max, margin_y_m)
         return np.array([x_lo, y_lo, self.z_top_m]), np.array([x_hi, y_hi, self.z_top_m])
-
-    @property
-    def y_center_m(self) -> float:
-        return 0.5 * (self.y_min + self.y_max)
 
     def contains(self, x: float, y: float) -> bool:
         """True iff (x, y) lies in the closed rectangle (tolerance 1 nm)."""
@@ -625,35 +625,29 @@ class Course:
         xc, yc = _point_xy(p_com_td_xy, "p_com_td_xy")
         xn, yn = _point_xy(p_nominal_xy, "p_nominal_xy")
         win = (xc - reach_x_m, xc + reach_x_m, yc - reach_y_m, yc + reach_y_m)
-        best: tuple[float, int, tuple[float, float, float, float]] | None = None
+        best: tuple[float, int] | None = None
         fallback: tuple[float, int] | None = None
         for i, patch in enumerate(self.patches):
             if not patch.allows(foot):
                 continue
-            x_lo, x_hi = _shrink(patch.x_min, patch.x_max, margin_m)
-            y_lo, y_hi = _shrink(patch.y_min, patch.y_max, margin_m)
-            box = (max(x_lo, win[0]), min(x_hi, win[1]), max(y_lo, win[2]), min(y_hi, win[3]))
+            lo, hi = patch.foothold_box(margin_m)
+            box = (max(lo[0], win[0]), min(hi[0], win[1]), max(lo[1], win[2]), min(hi[1], win[3]))
             if box[0] <= box[1] and box[2] <= box[3]:
                 dx = max(box[0] - xn, 0.0, xn - box[1])
                 dy = max(box[2] - yn, 0.0, yn - box[3])
                 score = dx * dx + dy * dy
                 if best is None or score < best[0]:
-                    best = (score, i, (x_lo, x_hi, y_lo, y_hi))
+                    best = (score, i)
             else:
-                gap = _rect_distance(xc, yc, x_lo, x_hi, y_lo, y_hi)
+                gap = _rect_distance(xc, yc, lo[0], hi[0], lo[1], hi[1])
                 if fallback is None or gap < fallback[0]:
                     fallback = (gap, i)
-        if best is not None:
-            _, i, (x_lo, x_hi, y_lo, y_hi) = best
-        elif fallback is not None:
-            i = fallback[1]
-            patch = self.patches[i]
-            x_lo, x_hi = _shrink(patch.x_min, patch.x_max, margin_m)
-            y_lo, y_hi = _shrink(patch.y_min, patch.y_max, margin_m)
-        else:
+        chosen = best or fallback
+        if chosen is None:
             return np.array([win[0], win[2], 0.0]), np.array([win[1], win[3], 0.0]), None
-        z = self.patches[i].z_top_m
-        return np.array([x_lo, y_lo, z]), np.array([x_hi, y_hi, z]), i
+        i = chosen[1]
+        lo, hi = self.patches[i].foothold_box(margin_m)
+        return lo, hi, i
 
 
 def _top_patch_index(patches: Sequence[Patch], x: float, y: float) -> int | None:

@@ -6,7 +6,7 @@ during the step the same dt is kept and the MPC replans every ``replan_period_s`
 least once per stage, Remark 4). The footholds the MPC chooses are the swing targets of
 the low-level controller; the next touchdown is bounded by the one-step terrain preview
 (eq. 24). With ``KDWalkConfig.preview`` set, the patch of that touchdown and the CoM path
-along the course come instead from a multi-step LIP footstep plan made at each step start
+along the course come instead from a multi-step LIP footstep plan, re-made at every solve
 (:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 """
 
@@ -114,9 +114,9 @@ class KDWalkConfig:
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
     # None: the centre is the commanded path itself.
     lip_anchor_max_m: float | None = None
-    # Multi-step footstep preview (gait/preview.py): at each step start a sagittal LIP plan
-    # of the next steps chooses the swing foot's patch (eq. 24 box) and its touchdown x
-    # and gives the CoM x reference of eq. 18. None: one-step preview (patch by reach).
+    # Multi-step footstep preview (gait/preview.py): a LIP plan of the next steps chooses
+    # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
+    # reference of eq. 18. None: one-step preview (patch by reach).
     preview: PreviewConfig | None = None
 
     def __post_init__(self) -> None:
@@ -377,7 +377,8 @@ class KDWalkController(Controller):
     def _margins(self) -> tuple[float, float]:
         """(x, y) foothold margins inside a patch with the preview [m]."""
         c = self.config
-        return c.foothold_margin_m, c.preview.foothold_margin_y_m if c.preview else 0.0
+        assert c.preview is not None
+        return c.foothold_margin_m, c.preview.foothold_margin_y_m
 
     def _on_preview(self, p: np.ndarray, step: int) -> np.ndarray:
         """``p`` (a heuristic foothold) with x from the preview's foothold of ``step`` (1 =
