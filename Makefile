@@ -20,9 +20,13 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd \
 		--course stepping-stones --vx 0.75 --dt 0.045 --duration 6 --out runs/demo/stepping-stones
+	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd \
+		--course stepping-stones --vx 0.75 --dt 0.055 --preview --duration 6 \
+		--out runs/demo/stepping-stones-preview
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd --course gap \
 		--vx 0.75 --dt 0.065 --duration 6 --out runs/demo/gap
-	$(VENV)/bin/gaitnet-mpc compare runs/demo/stepping-stones runs/demo/gap --out runs/demo/compare
+	$(VENV)/bin/gaitnet-mpc compare runs/demo/stepping-stones runs/demo/stepping-stones-preview \
+		runs/demo/gap --out runs/demo/compare
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
