@@ -34,8 +34,7 @@ SCENARIOS: tuple[Scenario, ...] = (
 
 
 def run(scenario: Scenario) -> dict:
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController
-    from gaitnet_mpc.gait.preview import PreviewConfig
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController, preview_walk_config
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.episode import Command, run_episode
@@ -46,7 +45,7 @@ def run(scenario: Scenario) -> dict:
     robot = load_robot(robot_name)
     course = load_course(course_name)
     command = Command(vx_mps=vx)
-    config = KDWalkConfig(preview=PreviewConfig() if preview else None)
+    config = preview_walk_config() if preview else KDWalkConfig()
     ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt), config=config)
     summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
     return {"label": label, **summary}

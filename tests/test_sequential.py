@@ -140,9 +140,32 @@ def test_preview_sets_the_touchdown_patch_and_the_com_path(humanoid) -> None:
         checked += 1
     assert not sim.fall.fell
     assert checked > 20
-    assert state.com_world_m[0] > 0.9  # reached the first stone
+    assert state.com_world_m[0] > course.patches[1].x_min  # the CoM is over the first stone
     kinds = {course.patches[j].feet for j in ctrl.preview.patch[1:]}
     assert kinds & {"left", "right"}  # the plan already looks into the one-foot lanes
+
+
+def test_lateral_offset_from_the_path_decays(humanoid) -> None:
+    """Pushed sideways while walking, the robot walks back to its commanded path with
+    ``lateral_return_time_s`` and keeps (part of) the offset without it."""
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+    from gaitnet_mpc.sim.disturbances import Push
+    from gaitnet_mpc.sim.simulator import SimConfig
+
+    offset = {}
+    for tau in (0.5, None):
+        course = load_course("flat")
+        command = Command(vx_mps=0.5)
+        push = Push(t_s=1.0, force_world_n=(0.0, 40.0, 0.0), duration_s=0.1)  # 4 N s left
+        sim = Simulator(humanoid, course, SimConfig(pushes=(push,)))
+        y0 = float(sim.state().com_world_m[1])
+        cfg = KDWalkConfig(lateral_return_time_s=tau)
+        ctrl = KDWalkController(humanoid, course, command, config=cfg)
+        summary = run_episode(sim, ctrl, command, 4.0, progress=False)
+        assert not summary["fell"]
+        offset[tau] = float(sim.state().com_world_m[1]) - y0
+    assert abs(offset[0.5]) < 0.02
+    assert abs(offset[None]) > 2 * abs(offset[0.5])
 
 
 def test_sequential_config_rejects_bad_relaxation() -> None:

@@ -38,13 +38,12 @@ def _srbm(ctx: ControllerContext) -> Controller:
 
 
 def _kd(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController
-    from gaitnet_mpc.gait.preview import PreviewConfig
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController, preview_walk_config
     from gaitnet_mpc.mpc.sequential import FixedDt
 
     dt_s = ctx.options.get("dt_s")
     policy = FixedDt() if dt_s is None else FixedDt(dt_s)
-    config = KDWalkConfig(preview=PreviewConfig() if ctx.options.get("preview") else None)
+    config = preview_walk_config() if ctx.options.get("preview") else KDWalkConfig()
     return KDWalkController(ctx.robot, ctx.course, ctx.command, dt_policy=policy, config=config)
 
 
