@@ -415,11 +415,18 @@ class KDWalkController(Controller):
     def _com_reference(
         self, state: RobotState, timing: ReferenceTiming, cmd: _RampedCommand
     ) -> tuple[np.ndarray, np.ndarray] | None:
-        """CoM path and velocity (h+1, 3) that replace f_ref's where not NaN: the LIP sway
-        orbit laterally (``lateral_reference="lip"``) and the preview plan's CoM along x."""
+        """CoM path and velocity (h+1, 3) that replace f_ref's where not NaN: laterally the
+        LIP sway orbit (``lateral_reference="lip"``) or, with ``lateral_return_time_s``, the
+        commanded path plus the measured offset decaying along the horizon (world y: the
+        courses run along x); along x the preview plan's CoM."""
         ref = self._lip_reference(state, timing, cmd)
         tau = self.config.lateral_return_time_s
-        if self.preview is None and (tau is None or ref is not None):
+        line_return = (
+            tau is not None
+            and self.config.lateral_reference == "line"
+            and not self.robot.spec.planar
+        )
+        if self.preview is None and not line_return:
             return ref
         if ref is None:
             shape = (timing.times_s.size, 3)
@@ -427,8 +434,7 @@ class KDWalkController(Controller):
         if self.preview is not None:
             pos, vel = self.preview.com_at(timing.times_s + (state.t_s - self._preview_t0_s))
             ref[0][:, 0], ref[1][:, 0] = pos[:, 0], vel[:, 0]
-        if tau is not None and self.config.lateral_reference == "line":
-            # lateral offset from the commanded path decays with time constant tau
+        if line_return:
             y_path = float(self._commanded_path_xy(state.t_s)[1])
             err = float(state.com_world_m[1]) - y_path
             decay = np.exp(-timing.times_s / tau)
