@@ -21,7 +21,7 @@ demo: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd \
 		--course stepping-stones --vx 0.75 --dt 0.045 --duration 6 --out runs/demo/stepping-stones
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd \
-		--course stepping-stones --vx 0.75 --dt 0.055 --preview --duration 6 \
+		--course stepping-stones --vx 0.75 --dt 0.05 --preview --duration 6 \
 		--out runs/demo/stepping-stones-preview
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd --course gap \
 		--vx 0.75 --dt 0.065 --duration 6 --out runs/demo/gap

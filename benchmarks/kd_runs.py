@@ -26,6 +26,7 @@ SCENARIOS: tuple[Scenario, ...] = (
     ("stepping-stones, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, False),
     ("stepping-stones, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, False),
     ("stones --preview, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0, True),
+    ("stones --preview, dt 0.05", "humanoid3d", "stepping-stones", 0.75, 0.05, 8.0, True),
     ("stones --preview, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, True),
     ("stones --preview, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, True),
     ("flat 0.75 m/s --preview", "humanoid3d", "flat", 0.75, 0.045, 20.0, True),

@@ -145,6 +145,29 @@ def test_preview_sets_the_touchdown_patch_and_the_com_path(humanoid) -> None:
     assert kinds & {"left", "right"}  # the plan already looks into the one-foot lanes
 
 
+def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
+    """Closed loop, the issue's stepping stones at 0.75 m/s with a fixed dt of 0.05 s and
+    ``kd --preview``: onto the final platform with no fall and every touchdown on a stone
+    that foot may use (10 of 10 runs perturbed by 1e-5 m crossed,
+    benchmarks/results/kd_stones_rate.md)."""
+    from gaitnet_mpc.control.kd_walk import preview_walk_config
+    from gaitnet_mpc.mpc.sequential import FixedDt
+
+    course = load_course("stepping-stones")
+    command = Command(vx_mps=0.75)
+    sim = Simulator(humanoid, course)
+    ctrl = KDWalkController(
+        humanoid, course, command, dt_policy=FixedDt(0.05), config=preview_walk_config()
+    )
+    summary = run_episode(sim, ctrl, command, 7.0, progress=False)
+    assert not summary["fell"]
+    assert summary["foothold_violations"] == 0
+    final_platform = course.patches[-1]
+    assert sim.state().com_world_m[0] > final_platform.x_min + 0.2
+    on_lanes = [f for f in summary["footholds"] if 1.2 < f["pos_m"][0] < 3.0]
+    assert len(on_lanes) >= 8 and all(f["allowed"] for f in on_lanes)
+
+
 def test_lateral_offset_from_the_path_decays(humanoid) -> None:
     """Pushed sideways while walking, the robot walks back to its commanded path with
     ``lateral_return_time_s`` and keeps (part of) the offset without it."""

@@ -133,16 +133,17 @@ class KDWalkConfig:
 
 def preview_walk_config() -> KDWalkConfig:
     """``kd --preview``: the multi-step footstep preview and a lateral return to the path
-    with a 0.5 s time constant (measured, docs/kd_lateral/README.md).
+    with a 0.7 s time constant (measured, docs/kd_lateral/README.md).
 
     The one-foot lanes of the stepping stones need the CoM between them; without a pull
     back to the path it drifts 0.3-0.7 m over the course and a foot cannot reach the other
-    lane. With the preview and 0.5 s the stones are crossed cleanly in 5 of 10 runs at dt
-    0.055 (0 of 10 without the return; ``benchmarks/results/kd_stones_rate.md``). It stays
-    off by default: on the gap it raises the QPs per solve from ~6.2 to ~8.8 and the
-    solves hitting j_max from 0-1 % to 2-4 %, for a drift of 0.12 m that it removes.
+    lane. Clean crossings over 10 runs that differ by 1e-5 m of initial state at dt 0.05:
+    10/10 with 0.6, 0.7 and 0.85 s, 2/10 with 0.5 s, 0/10 without the return
+    (``benchmarks/results/kd_stones_rate.md``). It stays off by default: on the gap it
+    raises the QPs per solve from ~6.2 to ~8.8 and the solves hitting j_max from 0-1 % to
+    2-4 % (0.5 s), for a drift of 0.12 m that it removes.
     """
-    return KDWalkConfig(preview=PreviewConfig(), lateral_return_time_s=0.5)
+    return KDWalkConfig(preview=PreviewConfig(), lateral_return_time_s=0.7)
 
 
 @dataclass(frozen=True)
