@@ -17,18 +17,22 @@ from machine import machine_info
 
 # (label, robot, course, vx [m/s], fixed dt [s], duration [s], multi-step preview)
 Scenario = tuple[str, str, str, float, float, float, bool]
+
+
+def _at_dts(
+    label: str, course: str, duration_s: float, dts: tuple[float, ...], preview: bool
+) -> tuple[Scenario, ...]:
+    """One humanoid3d scenario at 0.75 m/s per fixed dt."""
+    return tuple(
+        (f"{label}, dt {dt:g}", "humanoid3d", course, 0.75, dt, duration_s, preview) for dt in dts
+    )
+
+
 SCENARIOS: tuple[Scenario, ...] = (
     ("flat 0.75 m/s", "humanoid3d", "flat", 0.75, 0.045, 20.0, False),
-    ("gap 0.20 m, dt 0.045", "humanoid3d", "gap", 0.75, 0.045, 6.0, False),
-    ("gap 0.20 m, dt 0.055", "humanoid3d", "gap", 0.75, 0.055, 6.0, False),
-    ("gap 0.20 m, dt 0.065", "humanoid3d", "gap", 0.75, 0.065, 6.0, False),
-    ("stepping-stones, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0, False),
-    ("stepping-stones, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, False),
-    ("stepping-stones, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, False),
-    ("stones --preview, dt 0.045", "humanoid3d", "stepping-stones", 0.75, 0.045, 8.0, True),
-    ("stones --preview, dt 0.05", "humanoid3d", "stepping-stones", 0.75, 0.05, 8.0, True),
-    ("stones --preview, dt 0.055", "humanoid3d", "stepping-stones", 0.75, 0.055, 8.0, True),
-    ("stones --preview, dt 0.065", "humanoid3d", "stepping-stones", 0.75, 0.065, 8.0, True),
+    *_at_dts("gap 0.20 m", "gap", 6.0, (0.045, 0.055, 0.065), False),
+    *_at_dts("stepping-stones", "stepping-stones", 8.0, (0.045, 0.055, 0.065), False),
+    *_at_dts("stones --preview", "stepping-stones", 8.0, (0.045, 0.05, 0.055, 0.065), True),
     ("flat 0.75 m/s --preview", "humanoid3d", "flat", 0.75, 0.045, 20.0, True),
     ("biped2d flat 0.5 m/s", "biped2d", "flat", 0.5, 0.045, 20.0, False),
 )

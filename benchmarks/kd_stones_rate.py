@@ -15,6 +15,10 @@ import argparse
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig
 
 sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
@@ -24,19 +28,19 @@ DURATION_S = 8.0
 STEP_M = 1e-5
 
 
-def run(job: tuple[bool, float, int]) -> dict:
+def run(job: tuple[KDWalkConfig, float, int]) -> dict:
+    """One episode: ``(KDWalkConfig, fixed dt [s], i)``, initial base x shifted by i * STEP_M."""
     import mujoco
 
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController, preview_walk_config
+    from gaitnet_mpc.control.kd_walk import KDWalkController
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.episode import Command, run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
-    preview, dt, i = job
+    config, dt, i = job
     robot, course, command = load_robot("humanoid3d"), load_course("stepping-stones"), Command(0.75)
-    config = preview_walk_config() if preview else KDWalkConfig()
     ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt), config=config)
     sim = Simulator(robot, course)
     sim.data.qpos[0] += i * STEP_M
@@ -56,10 +60,14 @@ def main() -> None:
     parser.add_argument("--dts", default="0.05,0.055,0.06")
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
+    from gaitnet_mpc.control.kd_walk import KDWalkConfig, preview_walk_config
+
     dts = [float(s) for s in args.dts.split(",")]
-    jobs = [(p, dt, i) for p in CONFIGS.values() for dt in dts for i in range(1, args.runs + 1)]
+    configs = {True: preview_walk_config(), False: KDWalkConfig()}
+    keys = [(p, dt, i) for p in CONFIGS.values() for dt in dts for i in range(1, args.runs + 1)]
+    jobs = [(configs[p], dt, i) for p, dt, i in keys]
     with ProcessPoolExecutor(args.jobs) as pool:
-        results = dict(zip(jobs, pool.map(run, jobs), strict=True))
+        results = dict(zip(keys, pool.map(run, jobs), strict=True))
     lines = [
         "# kd on stepping-stones: success rate",
         "",

@@ -1,22 +1,18 @@
 """Clean stepping-stone crossings under tiny initial perturbations, any KDWalkConfig overrides:
-python stones_mc.py DT N 'JSON'  -> N runs with base x offsets eps_i = i * 1e-5 m (i = 1..N)"""
-import sys, json
-sys.path.insert(0, "docs/kd_lateral/scripts")
+python stones_mc.py DT N 'JSON'  -> N runs with base x offsets i * 1e-5 m (i = 1..N), the
+episodes of benchmarks/kd_stones_rate.py with the configuration from the overrides."""
+import json, sys
 from concurrent.futures import ProcessPoolExecutor
-def one(args):
-    dt, ov, eps = args
-    from overrides import kd_setup
-    from gaitnet_mpc.sim.episode import run_episode
-    from gaitnet_mpc.sim.simulator import Simulator
-    import mujoco
-    robot, course, cmd, ctrl = kd_setup("stepping-stones", dt, ov)
-    sim = Simulator(robot, course)
-    sim.data.qpos[0] += eps
-    mujoco.mj_forward(sim.model, sim.data)
-    s = run_episode(sim, ctrl, cmd, 8.0, progress=False)
-    return (not s["fell"]) and s["foothold_violations"] == 0, s["fell"], round(s["distance_m"], 2), s["foothold_violations"]
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
+from kd_stones_rate import run
+from overrides import kd_config
+
 dt, n, ov = float(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
 with ProcessPoolExecutor(2) as pool:
-    res = list(pool.map(one, [(dt, ov, i * 1e-5) for i in range(1, n + 1)]))
-ok = sum(r[0] for r in res)
-print(f"dt {dt} {ov}: clean crossings {ok}/{n}; no fall {sum(not r[1] for r in res)}/{n}; distances {[r[2] for r in res]}; violations {[r[3] for r in res]}", flush=True)
+    res = list(pool.map(run, [(kd_config(ov), dt, i) for i in range(1, n + 1)]))
+print(f"dt {dt} {ov}: clean crossings {sum(r['clean'] for r in res)}/{n}; "
+      f"no fall {sum(not r['fell'] for r in res)}/{n}; "
+      f"distances {[round(r['distance_m'], 2) for r in res]}; "
+      f"violations {[r['violations'] for r in res]}", flush=True)
