@@ -34,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.episode import Command
 from gaitnet_mpc.sim.simulator import Simulator
@@ -70,7 +71,7 @@ def closed_loop(seconds: float, vx_mps: float, profiler: cProfile.Profile | None
     course = load_course("flat")
     sim = Simulator(robot, course)
     command = Command(vx_mps=vx_mps)
-    ctrl = KDWalkController(robot, course, command)
+    ctrl = KDWalkController(robot, TerrainView(course), command)
     ctrl.reset(sim.state())
     if profiler is not None:
         profiler.enable()

@@ -39,7 +39,12 @@ SCENARIOS: tuple[Scenario, ...] = (
 
 
 def run(scenario: Scenario) -> dict:
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController, preview_walk_config
+    from gaitnet_mpc.control.kd_walk import (
+        KDWalkConfig,
+        KDWalkController,
+        preview_walk_config,
+        walk_terrain,
+    )
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.episode import Command, run_episode
@@ -51,7 +56,9 @@ def run(scenario: Scenario) -> dict:
     course = load_course(course_name)
     command = Command(vx_mps=vx)
     config = preview_walk_config() if preview else KDWalkConfig()
-    ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt), config=config)
+    ctrl = KDWalkController(
+        robot, walk_terrain(course, config), command, dt_policy=FixedDt(dt), config=config
+    )
     summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
     return {"label": label, **summary}
 

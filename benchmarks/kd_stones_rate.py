@@ -32,7 +32,7 @@ def run(job: tuple[KDWalkConfig, float, int]) -> dict:
     """One episode: ``(KDWalkConfig, fixed dt [s], i)``, initial base x shifted by i * STEP_M."""
     import mujoco
 
-    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.episode import Command, run_episode
@@ -41,7 +41,9 @@ def run(job: tuple[KDWalkConfig, float, int]) -> dict:
 
     config, dt, i = job
     robot, course, command = load_robot("humanoid3d"), load_course("stepping-stones"), Command(0.75)
-    ctrl = KDWalkController(robot, course, command, dt_policy=FixedDt(dt), config=config)
+    ctrl = KDWalkController(
+        robot, walk_terrain(course, config), command, dt_policy=FixedDt(dt), config=config
+    )
     sim = Simulator(robot, course)
     sim.data.qpos[0] += i * STEP_M
     mujoco.mj_forward(sim.model, sim.data)

@@ -45,6 +45,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from gaitnet_mpc.control.srbm_walk import SRBMWalkController
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.mpc.qp import (
     QPProblem,
     QPSolution,
@@ -84,7 +85,7 @@ def record(seconds: float, vx_mps: float) -> Recording:
     robot = load_robot("humanoid3d")
     course = load_course("flat")
     sim = Simulator(robot, course)
-    ctrl = SRBMWalkController(robot, course, Command(vx_mps=vx_mps))
+    ctrl = SRBMWalkController(robot, TerrainView(course), Command(vx_mps=vx_mps))
     problems: list[QPProblem] = []
     build = ctrl.mpc.build
 

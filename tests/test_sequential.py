@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.robots import FEET, load_robot
 from gaitnet_mpc.sim.episode import Command, run_episode
@@ -20,7 +21,7 @@ def humanoid():
 
 def _first_plan(robot, course, command):
     sim = Simulator(robot, course)
-    ctrl = KDWalkController(robot, course, command)
+    ctrl = KDWalkController(robot, TerrainView(course), command)
     state = sim.state()
     ctrl.reset(state)
     ctrl.compute(state)
@@ -70,7 +71,7 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
     course = load_course("gap", width_m=0.10, x_m=0.8)
     sim = Simulator(humanoid, course)
     command = Command(vx_mps=0.5)
-    ctrl = KDWalkController(humanoid, course, command)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command)
     summary = run_episode(sim, ctrl, command, 3.5, progress=False)
     assert not summary["fell"]
     assert summary["foothold_violations"] == 0
@@ -93,7 +94,7 @@ def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
     command = Command(vx_mps=0.5)
     sim = Simulator(humanoid, course)
     cfg = replace(KDWalkConfig(), lateral_reference="lip", lip_half_width_m=0.07)
-    ctrl = KDWalkController(humanoid, course, command, config=cfg)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, config=cfg)
     state = sim.state()
     ctrl.reset(state)
     ctrl.compute(state)
@@ -122,7 +123,9 @@ def test_preview_sets_the_touchdown_patch_and_the_com_path(humanoid) -> None:
     command = Command(vx_mps=0.75)
     sim = Simulator(humanoid, course)
     cfg = KDWalkConfig(preview=PreviewConfig())
-    ctrl = KDWalkController(humanoid, course, command, dt_policy=FixedDt(0.055), config=cfg)
+    ctrl = KDWalkController(
+        humanoid, walk_terrain(course, cfg), command, dt_policy=FixedDt(0.055), config=cfg
+    )
     state = sim.state()
     ctrl.reset(state)
     checked = 0
@@ -157,7 +160,11 @@ def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
     command = Command(vx_mps=0.75)
     sim = Simulator(humanoid, course)
     ctrl = KDWalkController(
-        humanoid, course, command, dt_policy=FixedDt(0.05), config=preview_walk_config()
+        humanoid,
+        walk_terrain(course, preview_walk_config()),
+        command,
+        dt_policy=FixedDt(0.05),
+        config=preview_walk_config(),
     )
     summary = run_episode(sim, ctrl, command, 7.0, progress=False)
     assert not summary["fell"]
@@ -183,7 +190,7 @@ def test_lateral_offset_from_the_path_decays(humanoid) -> None:
         sim = Simulator(humanoid, course, SimConfig(pushes=(push,)))
         y0 = float(sim.state().com_world_m[1])
         cfg = KDWalkConfig(lateral_return_time_s=tau)
-        ctrl = KDWalkController(humanoid, course, command, config=cfg)
+        ctrl = KDWalkController(humanoid, TerrainView(course), command, config=cfg)
         summary = run_episode(sim, ctrl, command, 4.0, progress=False)
         assert not summary["fell"]
         offset[tau] = float(sim.state().com_world_m[1]) - y0

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.control.srbm_walk import centroidal_inertia_body
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.mpc.srbm import NU, NX, SRBMMPC
 from gaitnet_mpc.robots import load_robot
 
@@ -89,7 +90,7 @@ def test_humanoid_walks_forward_with_srbm_mpc() -> None:
     sim = Simulator(robot, course)
     command = Command(vx_mps=0.25)
     summary = run_episode(
-        sim, SRBMWalkController(robot, course, command), command, 3.0, progress=False
+        sim, SRBMWalkController(robot, TerrainView(course), command), command, 3.0, progress=False
     )
     assert not summary["fell"]
     assert summary["distance_m"] > 0.5
@@ -160,7 +161,7 @@ def _walk(robot_name: str, vx: float, duration_s: float, pushes: tuple = ()) -> 
     course = load_course("flat")
     sim = Simulator(robot, course, SimConfig(pushes=pushes))
     command = Command(vx_mps=vx)
-    controller = SRBMWalkController(robot, course, command)
+    controller = SRBMWalkController(robot, TerrainView(course), command)
     return run_episode(sim, controller, command, duration_s, progress=False)
 
 

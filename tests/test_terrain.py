@@ -6,6 +6,7 @@ import copy
 import json
 import math
 from collections.abc import Callable
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,7 @@ from hypothesis import strategies as st
 from gaitnet_mpc.errors import ConfigError, CourseFormatError
 from gaitnet_mpc.terrain import (
     BUILTIN_COURSES,
+    SEEDED_COURSES,
     Course,
     Obstacle,
     Patch,
@@ -386,7 +388,9 @@ def test_stepping_stones_foothold_sequence_uses_lanes() -> None:
 
 
 COURSES = {name: load_course(name) for name in BUILTIN_COURSES} | {
-    "custom": Course.from_dict(_valid_dict())
+    "custom": Course.from_dict(_valid_dict()),
+    "stepping-stones-seed-3": load_course("stepping-stones", seed=3),
+    "gap-seed-3": load_course("gap", seed=3),
 }
 
 
@@ -426,7 +430,7 @@ def test_foothold_bounds_inside_triggered_patch(
 # ------------------------------------------------------------------------- MuJoCo geometry
 
 
-@pytest.mark.parametrize("name", [*BUILTIN_COURSES, "custom"])
+@pytest.mark.parametrize("name", sorted(COURSES))
 def test_geoms_xml_parses_with_right_tops(name: str) -> None:
     c = COURSES[name]
     xml = course_geoms_xml(c, thickness_m=0.4)
@@ -491,3 +495,216 @@ def test_reachable_foothold_bounds_respect_the_foot_of_a_patch() -> None:
             assert patch is not None
             assert course.patches[patch].allows(foot)
             assert np.all(lo <= hi)
+
+
+# ------------------------------------------------------------------------- randomised layouts
+
+#: The built-in stepping-stone table as of the randomised layouts' introduction (a copy, so
+#: that a change to terrain._STONES shows up here).
+_BUILTIN_STONES = (
+    (0.88, 1.18, -0.25, 0.25, "both", 0),
+    (1.26, 1.46, 0.01, 0.24, "left", 1),
+    (1.34, 1.56, -0.23, -0.02, "right", 1),
+    (1.54, 1.76, 0.03, 0.26, "left", 0),
+    (1.64, 1.86, -0.25, -0.01, "right", -1),
+    (1.96, 2.26, -0.22, 0.28, "both", 0),
+    (2.34, 2.54, 0.00, 0.23, "left", 1),
+    (2.42, 2.64, -0.24, -0.03, "right", 0),
+    (2.62, 2.84, 0.02, 0.25, "left", -1),
+    (2.72, 2.92, -0.22, 0.00, "right", -1),
+    (3.00, 3.30, -0.27, 0.23, "both", 0),
+)
+SEEDS = range(50)
+TOL_M = 1e-9
+
+
+def _platform(x_min: float, x_max: float) -> Patch:
+    return Patch(x_min, x_max, -1.5, 1.5, 0.0, "both")
+
+
+def _whole_mm(v: float) -> bool:
+    return abs(v * 1000.0 - round(v * 1000.0)) < 1e-6
+
+
+def _lane_holes_m(c: Course, foot: str) -> list[float]:
+    """x holes between consecutive patches usable by ``foot`` (sorted by x_min)."""
+    usable = sorted((p for p in c.patches if p.allows(foot)), key=lambda p: p.x_min)
+    holes, end = [], usable[0].x_max
+    for p in usable[1:]:
+        holes.append(p.x_min - end)
+        end = max(end, p.x_max)
+    return holes
+
+
+def _footstep_sequence_exists(
+    c: Course, step_min_m: float, step_max_m: float, margin_m: float, res_m: float = 0.005
+) -> bool:
+    """Whether alternating footholds (foot centres ``margin_m`` inside an allowed patch,
+    each ``step_min_m``-``step_max_m`` ahead of the other foot's) lead from x = 0 onto
+    the final platform.  Lateral placement is not modelled (lanes contain y = ±0.06 m)."""
+    xs = np.arange(-0.2, 4.5, res_m)
+    allowed = {}
+    for foot in ("left", "right"):
+        ok = np.zeros(xs.shape, bool)
+        for p in c.patches:
+            if p.allows(foot):
+                ok |= (xs >= p.x_min + margin_m - TOL_M) & (xs <= p.x_max - margin_m + TOL_M)
+        allowed[foot] = ok
+    reach = {foot: np.zeros(xs.shape, bool) for foot in allowed}
+    i0 = int(np.argmin(np.abs(xs)))
+    for foot in reach:
+        reach[foot][i0] = True  # either foot may step first
+    lo, hi = round(step_min_m / res_m), round(step_max_m / res_m)
+    for i in range(xs.size):
+        for foot, nxt in (("left", "right"), ("right", "left")):
+            if reach[foot][i]:
+                j = np.arange(i + lo, min(i + hi + 1, xs.size))
+                reach[nxt][j] |= allowed[nxt][j]
+    x_final = max(c.patches, key=lambda p: p.x_max).x_min
+    done = xs >= x_final + margin_m
+    return bool(reach["left"][done].any() or reach["right"][done].any())
+
+
+def test_default_layouts_unchanged() -> None:
+    stones = load_course("stepping-stones")
+    expected = (
+        _platform(-1.0, 0.8),
+        *(
+            Patch(x0, x1, y0, y1, level * 0.02, feet)
+            for x0, x1, y0, y1, feet, level in _BUILTIN_STONES
+        ),
+        _platform(3.4, 25.0),
+    )
+    assert stones.patches == expected
+    assert stones.seed is None and "seed" not in stones.to_dict()
+    assert load_course("stepping-stones", seed=None) == stones
+    gap = load_course("gap")
+    assert gap.patches == (_platform(-1.0, 1.5), _platform(1.7, 25.0))
+    assert gap.seed is None and "seed" not in gap.to_dict()
+    assert load_course("gap", width_m=0.2, x_m=1.5) == gap
+    assert load_course("uneven").seed == 0  # uneven keeps its default seed, now recorded
+
+
+def test_seeded_courses_are_the_ones_taking_a_seed() -> None:
+    assert SEEDED_COURSES == {"uneven", "stepping-stones", "gap"}
+
+
+@pytest.mark.parametrize("name", sorted(SEEDED_COURSES))
+def test_seeded_layout_deterministic_recorded_and_varied(name: str) -> None:
+    for seed in (0, 3, 49):
+        c = load_course(name, seed=seed)
+        assert c == load_course(name, seed=seed)
+        assert c.name == name and c.seed == seed
+        assert load_course(name, seed=np.int64(seed)) == c
+    layouts = {load_course(name, seed=seed).patches for seed in range(20)}
+    assert len(layouts) == 20
+    if name != "uneven":
+        assert load_course(name, seed=0).patches != load_course(name).patches
+
+
+@pytest.mark.parametrize("name", sorted(SEEDED_COURSES))
+@pytest.mark.parametrize("bad", [-1, True, 1.0, 2.5, "3"])
+def test_bad_seed_names_the_field(name: str, bad: object) -> None:
+    with pytest.raises(CourseFormatError) as info:
+        load_course(name, seed=bad)
+    assert info.value.field == f"{name}.seed"
+
+
+def test_random_stepping_stones_feasible_and_in_range() -> None:
+    dz_m = 0.02
+    kinds: set[str] = set()
+    lr_overlapping = lr_separated = 0
+    for seed in SEEDS:
+        c = load_course("stepping-stones", seed=seed, dz_m=dz_m)
+        start, *stones, final = c.patches
+        assert start == _platform(-1.0, 0.8), seed
+        assert final.feet == "both" and final.x_max == 25.0 and final.y_min == -1.5, seed
+        assert 3.1 - TOL_M <= final.x_min <= 3.95, seed
+        assert 0.86 - TOL_M <= stones[0].x_min <= 0.92 + TOL_M, seed
+        assert 3.05 - TOL_M <= stones[-1].x_max <= 3.9, seed
+        for p in stones:
+            kinds.add(p.feet)
+            length_m, width_m = p.x_max - p.x_min, p.y_max - p.y_min
+            assert length_m >= 0.18 - TOL_M, (seed, p)  # (a)
+            assert p.z_top_m in (-dz_m, 0.0, dz_m), (seed, p)
+            assert all(_whole_mm(v) for v in (p.x_min, p.x_max, p.y_min, p.y_max)), (seed, p)
+            if p.feet == "both":
+                assert 0.25 - TOL_M <= length_m <= 0.35 + TOL_M, (seed, p)
+                assert width_m == pytest.approx(0.5) and abs(p.y_center_m) <= 0.03 + TOL_M
+            else:
+                assert 0.18 - TOL_M <= length_m <= 0.24 + TOL_M, (seed, p)
+                assert 0.20 - TOL_M <= width_m <= 0.25 + TOL_M, (seed, p)
+                inner = p.y_min if p.feet == "left" else -p.y_max
+                assert -TOL_M <= inner <= 0.03 + TOL_M, (seed, p)
+        for foot in ("left", "right"):  # (b), and no overlap within a lane
+            holes = _lane_holes_m(c, foot)
+            assert 0.06 - TOL_M <= min(holes) and max(holes) <= 0.22 + TOL_M, (seed, foot)
+        for a, b in pairwise(stones):
+            gap_m = b.x_min - a.x_max
+            assert b.x_min >= a.x_min + 0.06 - TOL_M, (seed, a, b)
+            if {a.feet, b.feet} == {"left", "right"}:
+                assert gap_m <= 0.12 + TOL_M, (seed, a, b)  # (c)
+                lr_overlapping += gap_m < 0.0
+                lr_separated += gap_m > 0.0
+            if gap_m > 0.0 or "both" in (a.feet, b.feet):
+                assert 0.06 - TOL_M <= gap_m <= 0.12 + TOL_M, (seed, a, b)
+        assert 0.06 - TOL_M <= final.x_min - stones[-1].x_max <= 0.12 + TOL_M, seed
+    assert kinds == {"both", "left", "right"}
+    assert lr_overlapping > 0 and lr_separated > 0
+
+
+@pytest.mark.parametrize("seed", [None, *range(0, 50, 7)])
+def test_stepping_stones_walkable_with_steps_of_10_to_28_cm(seed: int | None) -> None:
+    c = load_course("stepping-stones", seed=seed)
+    assert _footstep_sequence_exists(c, 0.10, 0.28, margin_m=0.03)
+    if seed is None:  # the check can fail: a 0.20 m gap needs a step > 0.26 m
+        gap = load_course("gap", width_m=0.2, x_m=1.5)
+        assert _footstep_sequence_exists(gap, 0.10, 0.28, margin_m=0.03)
+        assert not _footstep_sequence_exists(gap, 0.10, 0.25, margin_m=0.03)
+
+
+def test_random_gap_in_range() -> None:
+    counts = set()
+    for seed in SEEDS:
+        c = load_course("gap", seed=seed)
+        assert all(p.feet == "both" and p.z_top_m == 0.0 for p in c.patches), seed
+        assert c.patches[0].x_min == -1.0 and c.patches[-1].x_max == 25.0, seed
+        holes = [(a.x_max, b.x_min) for a, b in pairwise(c.patches)]
+        counts.add(len(holes))
+        assert 1 <= len(holes) <= 3, seed
+        assert 1.0 - TOL_M <= holes[0][0] <= 2.5 + TOL_M, seed
+        for x0, x1 in holes:
+            assert 0.05 - TOL_M <= x1 - x0 <= 0.20 + TOL_M, (seed, x0, x1)
+            assert _whole_mm(x0) and _whole_mm(x1), (seed, x0, x1)
+            assert c.ground_height_at(0.5 * (x0 + x1), 0.0) is None
+        for (_, a), (b, _) in pairwise(holes):
+            assert 0.6 - TOL_M <= b - a <= 1.2 + TOL_M, seed
+    assert counts == {1, 2, 3}
+
+
+@pytest.mark.parametrize("field", ["width_m", "x_m"])
+def test_gap_seed_with_explicit_geometry_is_refused(field: str) -> None:
+    with pytest.raises(CourseFormatError) as info:
+        load_course("gap", seed=1, **{field: 0.1})
+    assert info.value.field == f"gap.{field}"
+
+
+def test_seed_json_round_trip(tmp_path: Path) -> None:
+    c = load_course("stepping-stones", seed=7)
+    assert c.to_dict()["seed"] == 7
+    assert Course.from_dict(c.to_dict()) == c
+    path = tmp_path / "course.json"
+    c.to_json(path)
+    assert json.loads(path.read_text())["seed"] == 7
+    assert Course.from_json(path) == c and load_course(path) == c
+    d = c.to_dict()
+    d["seed"] = None
+    assert Course.from_dict(d).seed is None
+    assert Course.from_dict(d).patches == c.patches
+    for bad in (-1, True, 1.5, "7"):
+        d["seed"] = bad
+        with pytest.raises(CourseFormatError) as info:
+            Course.from_dict(d)
+        assert info.value.field == "seed"
+    with pytest.raises(CourseFormatError, match="seed"):
+        Course("c", (_platform(-1.0, 1.0),), seed=-2)

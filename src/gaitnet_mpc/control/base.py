@@ -78,6 +78,12 @@ class Controller(ABC):
         """Planned duration of each step the controller started (empty if it does not step)."""
         return []
 
+    def terrain_knowledge(self) -> dict[str, object] | None:
+        """What the controller knows about the terrain (``summary.json``'s
+        ``terrain_knowledge``, see :mod:`~gaitnet_mpc.control.terrain_view`); None: nothing
+        (e.g. ``stand``)."""
+        return None
+
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         """(foot, position (3,) [m]) of each upcoming touchdown the controller plans now
         (drawn in the video); empty if it plans none."""

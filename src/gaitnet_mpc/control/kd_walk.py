@@ -18,7 +18,9 @@ import numpy as np
 
 from gaitnet_mpc.control.base import Controller, MPCStats
 from gaitnet_mpc.control.command import CommandProfile
+from gaitnet_mpc.control.contact import ContactParams
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
     GaitSchedule,
@@ -28,6 +30,7 @@ from gaitnet_mpc.gait import (
     SwingConfig,
     SwingTrajectory,
 )
+from gaitnet_mpc.gait.foothold import keep_beside_stance
 from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
@@ -122,6 +125,10 @@ class KDWalkConfig:
     # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
     # reference of eq. 18. None: one-step preview (patch by reach).
     preview: PreviewConfig | None = None
+    # Keep the feet apart (beyond the paper): a lateral-separation row per stage in the QP
+    # (KDConfig.min_foot_separation_m = RobotModel.min_foot_separation_m) and swing targets
+    # held on the swing foot's own side of the stance foot. False: the paper's QP.
+    keep_feet_apart: bool = True
 
     def __post_init__(self) -> None:
         if self.lateral_reference not in ("line", "lip"):
@@ -131,7 +138,7 @@ class KDWalkConfig:
             raise ConfigError("lateral_return_time_s", tau, "None or a finite time > 0 s")
 
 
-def preview_walk_config() -> KDWalkConfig:
+def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
     """``kd --preview``: the multi-step footstep preview and a lateral return to the path
     with a 0.7 s time constant (measured, docs/kd_lateral/README.md).
 
@@ -143,7 +150,49 @@ def preview_walk_config() -> KDWalkConfig:
     raises the QPs per solve from ~6.2 to ~8.8 and the solves hitting j_max from 0-1 % to
     2-4 % (0.5 s), for a drift of 0.12 m that it removes.
     """
-    return KDWalkConfig(preview=PreviewConfig(), lateral_return_time_s=0.7)
+    return replace(base or KDWalkConfig(), preview=PreviewConfig(), lateral_return_time_s=0.7)
+
+
+def paper_walk_config(planar: bool = False) -> KDWalkConfig:
+    """``kd --preset paper``: the paper's settings, without this project's additions.
+
+    Sub-problem weights and contact limits of Table VIII (3-D) or Table V (2-D: ``L^h`` 20,
+    ``L^H`` (200, 200, 300) on (m x, m z, pitch), ``L^{p_f}`` 0.01, ``L^{p_c}`` (100, 300) on
+    (x, z), ``f_max`` 250 N; the planar model ignores the other axes, which get the same
+    values), h = 10, h' = 5, Table X (``j_max`` 50, tolerances 1e-5 m / 0.01 N), the
+    one-step preview, no lateral foot-separation row, no swing inertial feedforward and no
+    trunk-yaw feedback (the low level of paper Sec. III: swing joint PD, stance
+    ``J_c^T`` mapping). README "Deviations from the paper" lists what the default adds.
+    """
+    if planar:
+        kd = KDConfig(
+            w_momentum=(20.0,) * 6,
+            w_pose=(200.0, 200.0, 200.0, 300.0, 300.0, 300.0),
+            w_p_foot=(0.01, 0.01, 0.01),
+            w_p_com=(100.0, 100.0, 300.0),
+            contact=ContactParams(fz_max_n=250.0),
+        )
+    else:
+        kd = KDConfig()  # Table VIII
+    return KDWalkConfig(
+        sequential=SequentialConfig(kd=kd),
+        low_level=LowLevelConfig(),
+        keep_feet_apart=False,
+    )
+
+
+#: Named presets of ``kd`` (``gaitnet-mpc run --controller kd --preset NAME``): the tuned
+#: default and the paper's settings, each a function of ``planar`` (the robot).
+KD_PRESETS = {
+    "default": lambda planar: KDWalkConfig(),
+    "paper": paper_walk_config,
+}
+
+
+def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
+    """The terrain view ``config`` needs: the one-step preview, or with ``config.preview``
+    the multi-step one."""
+    return TerrainView(course, TerrainKnowledge(multi_step=config.preview is not None))
 
 
 @dataclass(frozen=True)
@@ -162,21 +211,28 @@ class KDWalkController(Controller):
     def __init__(
         self,
         robot: RobotModel,
-        course: Course,
+        terrain: TerrainView,
         command: object,
         dt_policy: DtPolicy | None = None,
         config: KDWalkConfig | None = None,
     ) -> None:
         self.robot = robot
-        self.course = course
+        self.terrain = terrain
         self.command = command
         self.config = config or KDWalkConfig()
+        if self.config.preview is not None and not terrain.knowledge.multi_step:
+            raise ConfigError(
+                "terrain.knowledge.multi_step", False, "True with KDWalkConfig.preview set"
+            )
         self.dt_policy: DtPolicy = dt_policy or FixedDt()
         kd = replace(
             self.config.sequential.kd,
             mass_kg=robot.total_mass_kg,
             toe_m=robot.spec.foot_toe_m,
             heel_m=robot.spec.foot_heel_m,
+            min_foot_separation_m=(
+                robot.min_foot_separation_m if self.config.keep_feet_apart else None
+            ),
         )
         self.mpc = SequentialKDMPC(robot, replace(self.config.sequential, kd=kd))
         self.low = LowLevelController(robot, self.config.low_level)
@@ -219,6 +275,9 @@ class KDWalkController(Controller):
     def step_durations_s(self) -> list[float]:
         return self._steps
 
+    def terrain_knowledge(self) -> dict[str, object]:
+        return self.terrain.knowledge.to_dict()
+
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
             return []
@@ -252,8 +311,7 @@ class KDWalkController(Controller):
             yaw_rad=float(state.base_rpy_rad[2]),
             cmd_yaw_rate_radps=cmd.yaw_rate_radps,
         )
-        patch = self.course.patch_at(p[0], p[1])
-        z = self.course.patches[patch].z_top_m if patch is not None else self.ground_z
+        z = self.terrain.foothold_height_m(p[0], p[1], self.ground_z)
         p[2] = z + self.robot.spec.foot_contact_radius_m
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]
@@ -284,15 +342,16 @@ class KDWalkController(Controller):
         With a preview plan, the box of the patch it chose. Otherwise (one-step preview)
         the patch is chosen by kinematic reach from the CoM predicted at touchdown
         (current CoM plus its velocity times the time left in the step), preferring the
-        patch nearest the nominal (heuristic) foothold: :meth:`Course.reachable_foothold_bounds`.
+        patch nearest the nominal (heuristic) foothold
+        (:meth:`TerrainView.reachable_foothold_bounds`).
         """
         if self.preview is not None:
-            patch = self.course.patches[self.preview.patch[1]]
+            patch = self.terrain.patch(self.preview.patch[1])
             lo, hi = patch.foothold_box(*self._margins)
         else:
             t_left = self.schedule.time_left_in_step_s
             p_td = state.com_world_m[:2] + state.com_vel_world_mps[:2] * t_left
-            lo, hi, _ = self.course.reachable_foothold_bounds(
+            lo, hi, _ = self.terrain.reachable_foothold_bounds(
                 p_td,
                 foot,
                 nominal[:2],
@@ -376,7 +435,7 @@ class KDWalkController(Controller):
         stance = sched.stance_foot
         keep = None if first_step or self.preview is None else self.preview.patch[1]
         plan = plan_preview(
-            self.course,
+            self.terrain.course_for_multi_step_preview(),
             cfg,
             com_m=state.com_world_m[:2],
             com_v_mps=state.com_vel_world_mps[:2],
@@ -407,7 +466,7 @@ class KDWalkController(Controller):
         the next touchdown), y clipped into its patch's box and z on the patch."""
         plan = self.preview
         assert plan is not None
-        lo, hi = self.course.patches[plan.patch[step]].foothold_box(*self._margins)
+        lo, hi = self.terrain.patch(plan.patch[step]).foothold_box(*self._margins)
         out = np.clip(p, lo, hi)
         out[0] = plan.foothold_m[step, 0]
         out[2] = lo[2] + self.robot.spec.foot_contact_radius_m
@@ -510,10 +569,8 @@ class KDWalkController(Controller):
         self._plan_preview(state, cmd, first_step=True)
         if self.preview is not None:
             target = self._on_preview(target, 1)
-        obstacles = self.course.obstacles_between(
-            min(self.liftoff[swing][0], target[0]) - 0.1,
-            max(self.liftoff[swing][0], target[0]) + 0.2,
-        )
+        x0, x1 = sorted((self.liftoff[swing][0], target[0]))
+        obstacles = self.terrain.swing_obstacles(x0 - 0.1, x1 + 0.2)
         self.swing = self.config.swing.trajectory(
             self.liftoff[swing],
             target,
@@ -542,8 +599,15 @@ class KDWalkController(Controller):
                 [self.plan.iterate.f[k, i], self.plan.iterate.tau[k, i]]
             )
         t = sched.time_in_step_s
-        target = {
-            swing: (self.swing.position(t), self.swing.velocity(t), self.swing.acceleration(t))
-        }
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
+        p_swing = self.swing.position(t)
+        if yaw is not None and self.config.keep_feet_apart:
+            p_swing = keep_beside_stance(
+                p_swing,
+                swing,
+                state.foot_pos_world_m[stance],
+                yaw,
+                self.robot.min_foot_separation_m,
+            )
+        target = {swing: (p_swing, self.swing.velocity(t), self.swing.acceleration(t))}
         return self.low.torques(state, wrench, target, yaw)

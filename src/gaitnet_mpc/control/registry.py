@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gaitnet_mpc.control.base import Controller
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.terrain import Course
@@ -14,8 +15,9 @@ from gaitnet_mpc.terrain import Course
 
 @dataclass(frozen=True)
 class ControllerContext:
-    """What a controller factory may use: the robot model, the course (for one-step
-    preview only), the velocity command and free-form options from the CLI."""
+    """What a controller factory may use: the robot model, the course (handed to a walking
+    controller only through a :class:`TerrainView`), the velocity command and free-form
+    options from the CLI."""
 
     robot: RobotModel
     course: Course
@@ -34,17 +36,28 @@ def _srbm(ctx: ControllerContext) -> Controller:
 
     dt_s = ctx.options.get("dt_s")
     config = SRBMWalkConfig() if dt_s is None else SRBMWalkConfig(dt_s=dt_s)
-    return SRBMWalkController(ctx.robot, ctx.course, ctx.command, config)
+    return SRBMWalkController(ctx.robot, TerrainView(ctx.course), ctx.command, config)
 
 
 def _kd(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig, KDWalkController, preview_walk_config
+    from gaitnet_mpc.control.kd_walk import (
+        KD_PRESETS,
+        KDWalkController,
+        preview_walk_config,
+        walk_terrain,
+    )
     from gaitnet_mpc.mpc.sequential import FixedDt
 
     dt_s = ctx.options.get("dt_s")
     policy = FixedDt() if dt_s is None else FixedDt(dt_s)
-    config = preview_walk_config() if ctx.options.get("preview") else KDWalkConfig()
-    return KDWalkController(ctx.robot, ctx.course, ctx.command, dt_policy=policy, config=config)
+    preset = ctx.options.get("preset", "default")
+    if preset not in KD_PRESETS:
+        raise ConfigError("--preset", preset, f"one of {sorted(KD_PRESETS)}")
+    config = KD_PRESETS[preset](ctx.robot.spec.planar)
+    if ctx.options.get("preview"):
+        config = preview_walk_config(config)
+    terrain = walk_terrain(ctx.course, config)
+    return KDWalkController(ctx.robot, terrain, ctx.command, dt_policy=policy, config=config)
 
 
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {

@@ -16,12 +16,12 @@ import numpy as np
 import pinocchio as pin
 
 from gaitnet_mpc.control.stance import StanceMap
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import WalkingConfig, WalkingController
 from gaitnet_mpc.errors import QPSolveError
 from gaitnet_mpc.mpc.srbm import NX, SRBMMPC, SRBMConfig
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
-from gaitnet_mpc.terrain import Course
 
 
 @dataclass(frozen=True)
@@ -47,12 +47,12 @@ class SRBMWalkController(WalkingController):
     def __init__(
         self,
         robot: RobotModel,
-        course: Course,
+        terrain: TerrainView,
         command: object,
         config: SRBMWalkConfig | None = None,
     ) -> None:
         c = config or SRBMWalkConfig()
-        super().__init__(robot, course, command, c)
+        super().__init__(robot, terrain, command, c)
         self.mpc = SRBMMPC(
             robot.total_mass_kg,
             centroidal_inertia_body(robot),

@@ -54,6 +54,7 @@ import pinocchio as pin
 from gaitnet_mpc.control.base import Controller, MPCStats
 from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.gait import (
     GaitSchedule,
     GaitScheduleConfig,
@@ -66,7 +67,6 @@ from gaitnet_mpc.gait import (
 from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.state import RobotState
-from gaitnet_mpc.terrain import Course
 
 #: A late foot is lowered towards this depth below the ground [m] until it touches down.
 LATE_DEPTH_M = 0.03
@@ -167,12 +167,12 @@ class WalkingController(Controller):
     def __init__(
         self,
         robot: RobotModel,
-        course: Course,
+        terrain: TerrainView,
         command: object,
         config: WalkingConfig,
     ) -> None:
         self.robot = robot
-        self.course = course
+        self.terrain = terrain
         self.command = command
         self.config = config
         self.low = LowLevelController(robot, config.low_level)
@@ -230,6 +230,9 @@ class WalkingController(Controller):
     @property
     def step_durations_s(self) -> list[float]:
         return self._steps
+
+    def terrain_knowledge(self) -> dict[str, object]:
+        return self.terrain.knowledge.to_dict()
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         foot = self.schedule.swing_foot
@@ -364,7 +367,7 @@ class WalkingController(Controller):
         self.foothold[foot] = foothold
         target = self._swing_target(foot, foothold, state.t_s + t_left)
         p0 = state.foot_pos_world_m[foot]
-        obstacles = self.course.obstacles_between(min(p0[0], target[0]), max(p0[0], target[0]))
+        obstacles = self.terrain.swing_obstacles(p0[0], target[0])
         self.swing = self.config.swing.trajectory(
             p0, target, t_left, [(o.x_min, o.x_max, o.z_top_m) for o in obstacles]
         )

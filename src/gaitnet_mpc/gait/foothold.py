@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots.spec import FEET
 
-__all__ = ["RaibertConfig", "RaibertHeuristic"]
+__all__ = ["RaibertConfig", "RaibertHeuristic", "keep_beside_stance"]
 
 
 def _finite(value: object, field: str, lo: float = -math.inf, strict: bool = False) -> float:
@@ -206,3 +206,26 @@ class RaibertHeuristic:
         out[:2] = p_stance[:2] + rot @ d
         out[2] = ground_z + cfg.foot_height_m
         return out
+
+
+def keep_beside_stance(
+    p_world_m: np.ndarray,
+    foot: str,
+    p_stance_world_m: np.ndarray,
+    yaw_rad: float,
+    min_separation_m: float | None,
+) -> np.ndarray:
+    """``p_world_m`` (3,) of the swing foot ``foot``, moved sideways in the heading frame
+    of ``yaw_rad`` to at least ``min_separation_m`` on its own side of the stance foot
+    (left: +y of the heading), so that a swing never sweeps through the stance leg.
+    Unchanged where it already is (or where ``min_separation_m`` is None)."""
+    if min_separation_m is None:
+        return p_world_m
+    side = 1.0 if foot == "left" else -1.0
+    n_y = np.array([-math.sin(yaw_rad), math.cos(yaw_rad)])
+    lateral = side * float(n_y @ (p_world_m[:2] - p_stance_world_m[:2]))
+    if lateral >= min_separation_m:
+        return p_world_m
+    out = np.array(p_world_m, dtype=float)
+    out[:2] += side * (min_separation_m - lateral) * n_y
+    return out

@@ -63,6 +63,14 @@ Constraints (inequality rows ``l <= A z <= u`` and box ``lb <= z <= ub``)
   stages of a per-foot mask, by default the foot's next touchdown group
   (:func:`next_touchdown_mask`). Not applied to the measured stance group (the foot is
   already there).
+* Lateral foot separation (``min_foot_separation_m``, beside eq. 24; not in the paper):
+  at every stage ``n_y(psi_k)^T (p_f,left,k - p_f,right,k) >= d_min`` with ``n_y`` the
+  lateral (leftward) axis of the heading ``psi_k`` planned for the foot in swing at stage
+  ``k`` (fixed within a solve, so the row is linear). Not the stance foot's measured yaw:
+  a stance foot yawed by 0.1 rad would shift a 0.35 m step's lateral bound by 3.5 cm.
+  During a swing the swing foot's ``p_f`` is its next touchdown, so each touchdown lands
+  at least ``d_min`` on its own side of the foot it lands beside, and the legs cannot
+  cross. One row per stage, upper bound ``+1 km``.
 * Foot height: unless foothold bounds give a group a finite height range, its height is
   fixed to the reference (``foot_height_from_reference``, default on). Without this the
   bilinear problem is unbounded in practice: lowering a foot below the ground lengthens
@@ -418,6 +426,9 @@ class KDConfig:
     toe_m: float = 0.075
     heel_m: float = 0.075
     foot_height_from_reference: bool = True
+    #: Smallest lateral distance [m] between the feet in the stance foot's heading frame
+    #: (module docstring); None: no such row (the paper has none).
+    min_foot_separation_m: float | None = None
     trust_region_m: float | None = 0.1
     trust_region_com_m: float | None = None
     qp_backend: str = "piqp"  # fastest here, see BACKEND_TIMINGS_MS
@@ -439,7 +450,7 @@ class KDConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0):
                 raise ConfigError(name, value, "a finite float >= 0 (0 for a point foot)")
-        for name in ("trust_region_m", "trust_region_com_m"):
+        for name in ("trust_region_m", "trust_region_com_m", "min_foot_separation_m"):
             value = getattr(self, name)
             if value is not None:
                 _positive(name, value)
@@ -584,9 +595,11 @@ class KDSubproblem:
 
     @property
     def m_ineq(self) -> int:
-        """Inequality rows: wrench rows per foot and stage, then ``p_f`` tie rows."""
+        """Inequality rows: wrench rows per foot and stage, ``p_f`` tie rows, then (with
+        ``min_foot_separation_m``) one lateral-separation row per stage."""
         h = self.horizon
-        return N_FEET * h * self.n_wrench_rows + N_FEET * 3 * (h - 1)
+        n_sep = h if self.config.min_foot_separation_m is not None else 0
+        return N_FEET * h * self.n_wrench_rows + N_FEET * 3 * (h - 1) + n_sep
 
     def _build_columns(self) -> None:
         """Column index arrays of every variable group (layout of the module docstring)."""
@@ -644,6 +657,11 @@ class KDSubproblem:
         tie_rows = tie0 + 3 * np.arange((h - 1) * N_FEET).reshape(h - 1, N_FEET, 1) + r3
         tie_next = ineq.add_diag(tie_rows, self._col_pf[1:])  # (h-1, 2, 3)
         tie_prev = ineq.add_diag(tie_rows, self._col_pf[:-1])
+        self._s_sep: slice | None = None
+        if self.config.min_foot_separation_m is not None:
+            sep_rows = (tie0 + N_FEET * 3 * (h - 1) + np.arange(h))[:, None]  # (h, 1)
+            sep_cols = self._col_pf[:, :, :2].reshape(h, 2 * N_FEET)  # (h, 4): xL yL xR yR
+            self._s_sep = ineq.add(sep_rows, sep_cols)  # (h, 1, 4)
         ineq.finalize()
         self._ineq = ineq
         data = np.zeros(ineq.nnz)
@@ -822,8 +840,15 @@ class KDSubproblem:
         hi_w = np.where(stance, u_w - shift, -shift)
         free = (contact[:-1] & ~contact[1:])[:, :, None]  # lift-off between k and k+1
         gap = it.p_foot[:-1] - it.p_foot[1:]  # (h-1, 2, 3)
-        lo = np.concatenate([lo_w.ravel(), np.where(free, -_FREE_TIE_M, gap).ravel()])
-        hi = np.concatenate([hi_w.ravel(), np.where(free, _FREE_TIE_M, gap).ravel()])
+        lo_parts = [lo_w.ravel(), np.where(free, -_FREE_TIE_M, gap).ravel()]
+        hi_parts = [hi_w.ravel(), np.where(free, _FREE_TIE_M, gap).ravel()]
+        if self._s_sep is not None:
+            n_y, sep = self._separation(it, contact, a["foot_yaw_rad"])
+            data[self._s_sep] = np.concatenate([n_y, -n_y], axis=1).ravel()
+            lo_parts.append(c.min_foot_separation_m - sep)
+            hi_parts.append(_FREE_TIE_M - sep)
+        lo = np.concatenate(lo_parts)
+        hi = np.concatenate(hi_parts)
         a_in = self._ineq.csc(data)
 
         # ---- box: foot positions (measured stance foot, eq. 24, trust region)
@@ -844,6 +869,20 @@ class KDSubproblem:
         q[self._col_tau] = self._q_moment * it.tau
         q[self._col_pf] = self._q_p_foot * (it.p_foot - a["p_foot_ref"])
         return QPProblem(self._P, q, A_eq=a_eq, b_eq=b, A=a_in, l=lo, u=hi, lb=lb, ub=ub)
+
+    @staticmethod
+    def _separation(
+        it: KDIterate, contact: np.ndarray, foot_yaw_rad: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Leftward axes ``n_y(psi_k)`` (h, 2) of the separation rows (``psi_k``: the
+        heading of the foot in swing at stage ``k``, the right foot's where both or neither
+        stand) and the iterate's separation ``n_y^T (p_left - p_right)`` (h,) [m]."""
+        h = contact.shape[0]
+        swing = np.where(contact[:, 1] & ~contact[:, 0], 0, 1)
+        yaw = foot_yaw_rad[np.arange(h), swing]
+        n_y = np.stack([-np.sin(yaw), np.cos(yaw)], axis=1)  # left = +y of the heading
+        d = it.p_foot[:, 0, :2] - it.p_foot[:, 1, :2]
+        return n_y, np.einsum("kj,kj->k", n_y, d)
 
     def _wrench_rows(self, yaw_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Stance rows of :func:`foot_wrench_constraints` at ``yaw_rad``, memoised."""

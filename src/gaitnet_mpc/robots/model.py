@@ -102,6 +102,26 @@ class RobotModel:
     def total_mass_kg(self) -> float:
         return float(np.sum(self.mj_model.body_mass))
 
+    @cached_property
+    def min_foot_separation_m(self) -> float | None:
+        """Smallest lateral distance between the foot centres that keeps the lower legs
+        apart [m]: the two widest lower-leg lateral half-widths (capsule/sphere radius, box
+        half-width along y) plus ``spec.leg_clearance_m`` (humanoid3d: 2 x 0.02 m shank
+        radius + 0.02 m = 0.06 m). None where the spec sets no clearance (planar robot)."""
+        spec = self.spec
+        if spec.leg_clearance_m is None:
+            return None
+        m = self.mj_model
+        half = []
+        for foot in FEET:
+            widths = []
+            for name in spec.lower_leg_geoms[foot]:
+                g = m.geom(name)
+                box = int(g.type[0]) == int(mujoco.mjtGeom.mjGEOM_BOX)
+                widths.append(float(g.size[1] if box else g.size[0]))
+            half.append(max(widths))
+        return sum(half) + spec.leg_clearance_m
+
     # ------------------------------------------------------------ conversions
     def mj_to_pin(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """MuJoCo (qpos, qvel) -> Pinocchio (q, v); see the module docstring."""

@@ -32,6 +32,11 @@ class RobotSpec:
         foot_toe_m: distance from foot centre to toe along the foot axis [m] (0 = point foot).
         foot_heel_m: distance from foot centre to heel [m].
         foot_contact_radius_m: height of the foothold point above the ground in contact [m].
+        lower_leg_geoms: per foot, the MJCF geoms of the shank and foot (their lateral
+            half-widths set :attr:`RobotModel.min_foot_separation_m`).
+        leg_clearance_m: lateral gap kept between the two lower legs by foot placement, on
+            top of their half-widths, for swing tracking and landing errors [m]; None for a
+            planar robot whose legs move in separate planes.
     """
 
     name: str
@@ -47,6 +52,8 @@ class RobotSpec:
     foot_toe_m: float = 0.0
     foot_heel_m: float = 0.0
     foot_contact_radius_m: float = 0.0
+    lower_leg_geoms: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    leg_clearance_m: float | None = None
 
     @property
     def mjcf_path(self) -> Path:

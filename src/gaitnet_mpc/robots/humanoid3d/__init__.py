@@ -30,4 +30,6 @@ SPEC = RobotSpec(
     foot_toe_m=0.075,
     foot_heel_m=0.075,
     foot_contact_radius_m=0.01,
+    lower_leg_geoms={f: (f"{f}_shank", f"{f}_foot") for f in ("left", "right")},
+    leg_clearance_m=0.02,
 )

@@ -1,0 +1,103 @@
+"""What a walking controller knows about the terrain: one explicit, recorded object.
+
+The paper's controller has a *one-step terrain preview* (Sec. IV-B, eq. 24): at each step
+it knows the patches the next touchdown may use, with their boxes and heights. A robot that
+perceives its next foothold also perceives what stands between its swing foot and that
+foothold, so the one-step preview here includes the boxes and heights of the obstacles
+between a swing's lift-off and its touchdown (``TerrainKnowledge.obstacle_heights``, on by
+default; off, swings get no obstacle clearance). The multi-step footstep preview of
+``kd --preview`` (beyond the paper) may in addition read every patch of the course ahead
+(:meth:`TerrainView.course_for_multi_step_preview`).
+
+Controllers get a :class:`TerrainView`, never the :class:`~gaitnet_mpc.terrain.Course`
+itself, and ``summary.json`` records the run's :class:`TerrainKnowledge` under
+``terrain_knowledge``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.terrain import Course, Obstacle, Patch
+
+__all__ = ["TerrainKnowledge", "TerrainView"]
+
+
+@dataclass(frozen=True)
+class TerrainKnowledge:
+    """Which terrain information a controller may use.
+
+    Attributes:
+        multi_step: the multi-step footstep preview (``--preview``) may read the patches of
+            the course ahead (beyond the paper); False: the paper's one-step preview.
+        obstacle_heights: swing trajectories know the obstacles (box and height) between
+            lift-off and touchdown.
+    """
+
+    multi_step: bool = False
+    obstacle_heights: bool = True
+
+    def to_dict(self) -> dict[str, object]:
+        return {"preview": "multi-step" if self.multi_step else "one-step", **asdict(self)}
+
+
+class TerrainView:
+    """The queries a walking controller may make of the course (module docstring)."""
+
+    def __init__(self, course: Course, knowledge: TerrainKnowledge | None = None) -> None:
+        self._course = course
+        self.knowledge = knowledge or TerrainKnowledge()
+
+    # ------------------------------------------------------------- one-step preview
+    def patch_at(self, x_m: float, y_m: float) -> int | None:
+        """Index of the patch under a candidate foothold (None: a hole)."""
+        return self._course.patch_at(x_m, y_m)
+
+    def patch(self, index: int) -> Patch:
+        """The patch (box, height, feet allowed) of a foothold found by a query here."""
+        return self._course.patches[index]
+
+    def foothold_height_m(self, x_m: float, y_m: float, default_m: float) -> float:
+        """Top of the patch under a candidate foothold, ``default_m`` over a hole [m]."""
+        j = self.patch_at(x_m, y_m)
+        return self.patch(j).z_top_m if j is not None else default_m
+
+    def reachable_foothold_bounds(
+        self,
+        p_com_touchdown_xy: ArrayLike,
+        foot: str,
+        nominal_xy: ArrayLike,
+        *,
+        reach_x_m: float,
+        margin_m: float,
+    ) -> tuple[np.ndarray, np.ndarray, int | None]:
+        """Eq. 24 box of the next touchdown: :meth:`Course.reachable_foothold_bounds`."""
+        return self._course.reachable_foothold_bounds(
+            p_com_touchdown_xy, foot, nominal_xy, reach_x_m=reach_x_m, margin_m=margin_m
+        )
+
+    def swing_obstacles(self, x0_m: float, x1_m: float) -> list[Obstacle]:
+        """Obstacles between a swing's lift-off ``x0_m`` and touchdown ``x1_m`` (either
+        order), or none where ``obstacle_heights`` is off."""
+        if not self.knowledge.obstacle_heights:
+            return []
+        return self._course.obstacles_between(min(x0_m, x1_m), max(x0_m, x1_m))
+
+    # ------------------------------------------------------------- beyond the paper
+    def course_for_multi_step_preview(self) -> Course:
+        """The whole course, for the multi-step footstep preview only.
+
+        Raises:
+            ConfigError: the run's knowledge is the one-step preview.
+        """
+        if not self.knowledge.multi_step:
+            raise ConfigError(
+                "terrain_knowledge.multi_step",
+                False,
+                "True (--preview) for a multi-step footstep preview",
+            )
+        return self._course
