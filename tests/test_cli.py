@@ -29,6 +29,11 @@ SUMMARY_KEYS = {
     "mpc",
     "wall_time_s",
     "realtime_factor",
+    "diverged",
+    "self_collisions",
+    "self_collision_first_t_s",
+    "self_collision_max_depth_m",
+    "self_collision_pairs",
 }
 
 
@@ -58,7 +63,8 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
     assert (out / "course.json").is_file()
     summary = json.loads((out / "summary.json").read_text())
     assert SUMMARY_KEYS <= summary.keys()
-    assert summary["fell"] is False
+    assert summary["fell"] is False and summary["diverged"] is False
+    assert summary["self_collisions"] == 0 and summary["self_collision_pairs"] == []
     assert summary["duration_s"] == pytest.approx(1.2)
     assert summary["mpc"] is None
     lines = (out / "log.csv").read_text().splitlines()
@@ -68,6 +74,7 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         assert col in header
     last = dict(zip(header, lines[-1].split(","), strict=True))
     assert last["mpc_dt_s"] == "nan" and last["stance_foot"] == "nan"  # no gait schedule
+    assert header[-1] == "self_contact" and last["self_contact"] == "0"
     import imageio.v3 as iio
 
     frames = iio.imread(out / "video.mp4")
@@ -84,7 +91,11 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         (["--push", "t=1,fx=2"], "--push"),
         (["--duration", "-1"], "--duration: got -1.0"),
         (["--vx", "9"], "--vx: got 9.0"),
-        (["--payload-kg", "-2"], "payload_kg: got -2.0"),
+        (["--payload-kg", "-2"], "--payload-kg: got -2.0"),
+        (["--payload-kg", "17"], "--payload-kg: got 17.0, expected a mass in [0, 16] kg"),
+        (["--robot", "biped2d", "--payload-kg", "10.5"], "--payload-kg: got 10.5"),
+        (["--push", "t=0.1,fx=1e9,dur=0.1"], "--push fx: got 1000000000.0, expected a force"),
+        (["--push", "t=0.1,fx=500,dur=0.5"], "push.impulse: got '250 N s"),
         (["--controller", "srbm", "--preview"], "--preview: got 'srbm', expected the kd"),
     ],
 )
@@ -94,6 +105,7 @@ def test_bad_input_fails_fast_with_the_field(
     rc = main(["run", "--no-video", "--no-progress", "--out", str(tmp_path / "x"), *args])
     assert rc == 2
     assert message in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()  # refused before the run
 
 
 def test_unknown_robot_is_an_argparse_error() -> None:

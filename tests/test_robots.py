@@ -141,3 +141,32 @@ def test_state_conversion_round_trip(robot: RobotModel) -> None:
     qpos2, qvel2 = robot.pin_to_mj(q, v)
     np.testing.assert_allclose(qpos2, qpos, atol=1e-12)
     np.testing.assert_allclose(qvel2, qvel, atol=1e-12)
+
+
+def test_left_and_right_legs_collide(robot: RobotModel) -> None:
+    """Self-collision is on: every left-leg link (thigh, shank, foot) has a contact pair
+    with every right-leg link, and a pose with the feet pushed into each other makes
+    MuJoCo report leg-leg contacts (the contype/conaffinity bits alone filter them out)."""
+    m = robot.mj_model
+    pairs = {
+        frozenset((m.geom(int(a)).name, m.geom(int(b)).name))
+        for a, b in zip(m.pair_geom1, m.pair_geom2, strict=True)
+    }
+    links = ("thigh", "shank", "foot")
+    for a in links:
+        for b in links:
+            assert frozenset((f"left_{a}", f"right_{b}")) in pairs
+    data = mujoco.MjData(m)
+    data.qpos[:] = robot.standing_qpos(0.0, 0.0, 0.0)
+    if robot.spec.planar:
+        return  # the legs move in planes 8 cm apart: no pose of the model makes them meet
+    hip_roll = {f: m.joint(f"{f}_hip_roll").qposadr[0] for f in ("left", "right")}
+    data.qpos[hip_roll["left"]] = -0.35  # both legs rolled inward to their joint limits
+    data.qpos[hip_roll["right"]] = 0.35
+    mujoco.mj_forward(m, data)
+    robot_bodies = {m.body(n).id for f in ("left", "right") for n in (f"{f}_shank", f"{f}_foot")}
+    touching = [
+        (int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2]))
+        for c in data.contact[: data.ncon]
+    ]
+    assert any(b1 in robot_bodies and b2 in robot_bodies for b1, b2 in touching)

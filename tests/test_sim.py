@@ -44,12 +44,67 @@ def test_push_parse() -> None:
         ("x=1,t=1,dur=1", "--push"),
         ("t=-1,dur=1", "push.t"),
         ("t=1,dur=0", "push.dur"),
+        ("t=0.1,fx=1e9,dur=0.1", "--push fx"),
+        ("t=0.1,fz=-1001,dur=0.1", "--push fz"),
+        ("t=0.1,fx=800,fy=800,dur=0.1", "push.force"),
+        ("t=0.1,fx=100,dur=1.01", "push.impulse"),
+        ("t=0.1,fx=1,dur=6", "push.dur"),
     ],
 )
 def test_push_parse_errors_name_the_field(text: str, field: str) -> None:
     with pytest.raises(ConfigError) as err:
         Push.parse(text)
     assert err.value.field == field
+
+
+def test_push_bounds_are_inclusive() -> None:
+    assert Push.parse("t=0,fx=1000,dur=0.1").impulse_ns[0] == pytest.approx(100.0)
+    assert Push.parse("t=0,fy=20,dur=5").duration_s == 5.0
+
+
+def test_payload_above_the_robot_mass_is_refused(humanoid) -> None:
+    with pytest.raises(ConfigError, match=r"payload_kg: got 60\.0, expected a mass in \[0, 50\]"):
+        SimConfig(payload_kg=60.0)
+    with pytest.raises(ConfigError, match=r"payload_kg: got 16\.5, expected a mass in \[0, 16\]"):
+        Simulator(humanoid, load_course("flat"), SimConfig(payload_kg=16.5))
+    with pytest.raises(ConfigError, match=r"\[0, 10\] kg"):
+        Simulator(load_robot("biped2d"), load_course("flat"), SimConfig(payload_kg=11.0))
+
+
+def test_crossed_legs_are_self_collisions_not_a_fall(humanoid) -> None:
+    sim = Simulator(humanoid, load_course("flat"))
+    if sim.model.npair == 0:
+        pytest.skip("the humanoid3d MJCF has no <contact><pair> self-collision entries yet")
+    qpos = humanoid.standing_qpos()
+    qpos[sim.model.joint("left_hip_roll").qposadr[0]] = -0.35  # both legs inward: they cross
+    qpos[sim.model.joint("right_hip_roll").qposadr[0]] = 0.35
+    qpos[2] += 0.1  # feet in the air: no terrain contact at all
+    sim.reset(qpos)
+    assert sim.self_contact  # the first log row already sees it
+    sim.step(np.zeros(humanoid.n_joints))
+    stats = sim.self_collisions
+    assert sim.self_contact and stats.ticks == 1
+    assert stats.first_t_s == pytest.approx(sim.config.timestep_s)
+    assert 0.0 < stats.max_depth_m < 0.1
+    assert ("left_shank", "right_shank") in stats.body_pairs
+    assert all(a < b for a, b in stats.body_pairs)
+    assert not sim.fall.fell  # a self-contact is not "a body other than a foot touched"
+    assert not any(sim.state().foot_contact.values())
+    summary = stats.to_dict()
+    assert summary["self_collisions"] == 1
+    assert "left_shank/right_shank" in summary["self_collision_pairs"]
+
+
+def test_standing_has_no_self_collision(humanoid) -> None:
+    sim = Simulator(humanoid, load_course("flat"))
+    _run(sim, StandController(humanoid), 0.3)
+    assert sim.self_collisions.to_dict() == {
+        "self_collisions": 0,
+        "self_collision_first_t_s": None,
+        "self_collision_max_depth_m": 0.0,
+        "self_collision_pairs": [],
+    }
+    assert not sim.self_contact and not sim.diverged
 
 
 def test_bad_torques_are_rejected(humanoid) -> None:

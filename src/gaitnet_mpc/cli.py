@@ -44,14 +44,33 @@ def _build_parser() -> argparse.ArgumentParser:
         "(gait/preview.py) instead of the one-step preview",
     )
     run.add_argument(
+        "--preset",
+        default=None,
+        choices=("default", "paper"),
+        help="kd only: 'default' (tuned, see README 'Deviations from the paper') or 'paper' "
+        "(Table VIII / Table V weights and limits, one-step preview, none of the additions)",
+    )
+    run.add_argument(
         "--push",
         action="append",
         default=[],
         metavar="t=..,fx=..,fy=..,dur=..",
-        help="impulse at the trunk CoM (repeatable); forces in N, times in s",
+        help="impulse at the trunk CoM (repeatable); forces in N (|f| <= 1000 N), times in s "
+        "(dur <= 5 s), impulse |f| dur <= 100 N s",
     )
-    run.add_argument("--payload-kg", type=float, default=0.0, help="unknown mass on the trunk [kg]")
-    run.add_argument("--seed", type=int, default=0, help="seed for randomised courses")
+    run.add_argument(
+        "--payload-kg",
+        type=float,
+        default=0.0,
+        help="unknown mass on the trunk [kg], at most the robot's own mass",
+    )
+    run.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="seed of a randomised layout (uneven, stepping-stones, gap); without it the "
+        "built-in layout",
+    )
     run.add_argument("--out", type=Path, default=None, help="run folder (default runs/<time>)")
     run.add_argument("--no-video", action="store_true", help="skip the MP4 video")
     run.add_argument("--no-plots", action="store_true", help="skip the PNGs in plots/")
@@ -140,7 +159,7 @@ def _run(args: argparse.Namespace) -> int:
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.disturbances import Push
     from gaitnet_mpc.sim.episode import Command, VideoConfig, run_episode
-    from gaitnet_mpc.sim.simulator import SimConfig, Simulator
+    from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
     from gaitnet_mpc.terrain import load_course
 
     if args.viewer:
@@ -148,7 +167,14 @@ def _run(args: argparse.Namespace) -> int:
     command = Command(args.vx, args.vy, args.yaw_rate)
     pushes = tuple(Push.parse(p) for p in args.push)
     robot = load_robot(args.robot)
-    params = {"seed": args.seed} if args.course == "uneven" else {}
+    check_payload(args.payload_kg, robot.total_mass_kg, "--payload-kg")
+    from gaitnet_mpc.terrain import SEEDED_COURSES
+
+    params = {} if args.seed is None else {"seed": args.seed}
+    if params and args.course not in SEEDED_COURSES:
+        raise ConfigError(
+            "--seed", args.seed, "a course with a randomised layout (uneven, stepping-stones, gap)"
+        )
     course = load_course(args.course, **params)
     options = {}
     if args.dt is not None:
@@ -159,6 +185,10 @@ def _run(args: argparse.Namespace) -> int:
         if args.controller != "kd":
             raise ConfigError("--preview", args.controller, "the kd controller")
         options["preview"] = True
+    if args.preset is not None:
+        if args.controller != "kd":
+            raise ConfigError("--preset", args.controller, "the kd controller")
+        options["preset"] = args.preset
     controller = make_controller(
         args.controller, ControllerContext(robot, course, command, options)
     )
@@ -175,6 +205,7 @@ def _run(args: argparse.Namespace) -> int:
         ],
         "payload_kg": args.payload_kg,
         "seed": args.seed,
+        "terrain_knowledge": controller.terrain_knowledge(),
     }
     video = None if args.no_video else VideoConfig()
     viewer = _open_viewer(sim, robot.spec.trunk_body) if args.viewer else None

@@ -119,8 +119,10 @@ class KDWalkConfig:
     lip_anchor_max_m: float | None = None
     # With the "line" reference: the CoM's lateral offset from the commanded path decays
     # along the horizon with this time constant [s] (None: the line starts at the CoM and
-    # nothing pulls the robot back to its path). See preview_walk_config.
-    lateral_return_time_s: float | None = None
+    # nothing pulls the robot back to its path). With the feet kept apart the robot
+    # drifts sideways without it (gap, dt 0.045: 0.62 m, then a fall); the 0.7 s value was
+    # chosen on the built-in stepping stones (docs/design/lateral_return.md).
+    lateral_return_time_s: float | None = 0.7
     # Multi-step footstep preview (gait/preview.py): a LIP plan of the next steps chooses
     # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
     # reference of eq. 18. None: one-step preview (patch by reach).
@@ -139,18 +141,16 @@ class KDWalkConfig:
 
 
 def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
-    """``kd --preview``: the multi-step footstep preview and a lateral return to the path
-    with a 0.7 s time constant (measured, docs/kd_lateral/README.md).
+    """``kd --preview``: ``base`` (default: :class:`KDWalkConfig`) with the multi-step
+    footstep preview, and a lateral return to the path (0.7 s) where ``base`` has none.
 
     The one-foot lanes of the stepping stones need the CoM between them; without a pull
     back to the path it drifts 0.3-0.7 m over the course and a foot cannot reach the other
-    lane. Clean crossings over 10 runs that differ by 1e-5 m of initial state at dt 0.05:
-    10/10 with 0.6, 0.7 and 0.85 s, 2/10 with 0.5 s, 0/10 without the return
-    (``benchmarks/results/kd_stones_rate.md``). It stays off by default: on the gap it
-    raises the QPs per solve from ~6.2 to ~8.8 and the solves hitting j_max from 0-1 % to
-    2-4 % (0.5 s), for a drift of 0.12 m that it removes.
+    lane (``benchmarks/results/kd_stones_rate.md``).
     """
-    return replace(base or KDWalkConfig(), preview=PreviewConfig(), lateral_return_time_s=0.7)
+    base = base or KDWalkConfig()
+    tau = base.lateral_return_time_s or 0.7
+    return replace(base, preview=PreviewConfig(), lateral_return_time_s=tau)
 
 
 def paper_walk_config(planar: bool = False) -> KDWalkConfig:
@@ -178,6 +178,7 @@ def paper_walk_config(planar: bool = False) -> KDWalkConfig:
         sequential=SequentialConfig(kd=kd),
         low_level=LowLevelConfig(),
         keep_feet_apart=False,
+        lateral_return_time_s=None,
     )
 
 
@@ -607,7 +608,8 @@ class KDWalkController(Controller):
                 swing,
                 state.foot_pos_world_m[stance],
                 yaw,
-                self.robot.min_foot_separation_m,
+                self.robot.min_foot_separation_m
+                + self.robot.spec.foot_toe_m * abs(np.sin(state.foot_yaw_rad[stance] - yaw)),
             )
         target = {swing: (p_swing, self.swing.velocity(t), self.swing.acceleration(t))}
         return self.low.torques(state, wrench, target, yaw)

@@ -64,7 +64,9 @@ Constraints (inequality rows ``l <= A z <= u`` and box ``lb <= z <= ub``)
   (:func:`next_touchdown_mask`). Not applied to the measured stance group (the foot is
   already there).
 * Lateral foot separation (``min_foot_separation_m``, beside eq. 24; not in the paper):
-  at every stage ``n_y(psi_k)^T (p_f,left,k - p_f,right,k) >= d_min`` with ``n_y`` the
+  at every stage ``n_y(psi_k)^T (p_f,left,k - p_f,right,k) >= d_min + l |sin(psi_L,k -
+  psi_R,k)|`` (``l``: the longer of toe and heel; a foot yawed against the other sweeps
+  that far sideways) with ``n_y`` the
   lateral (leftward) axis of the heading ``psi_k`` planned for the foot in swing at stage
   ``k`` (fixed within a solve, so the row is linear). Not the stance foot's measured yaw:
   a stance foot yawed by 0.1 rad would shift a 0.35 m step's lateral bound by 3.5 cm.
@@ -845,7 +847,9 @@ class KDSubproblem:
         if self._s_sep is not None:
             n_y, sep = self._separation(it, contact, a["foot_yaw_rad"])
             data[self._s_sep] = np.concatenate([n_y, -n_y], axis=1).ravel()
-            lo_parts.append(c.min_foot_separation_m - sep)
+            yaw = a["foot_yaw_rad"]
+            sweep = max(c.toe_m, c.heel_m) * np.abs(np.sin(yaw[:, 0] - yaw[:, 1]))
+            lo_parts.append(c.min_foot_separation_m + sweep - sep)
             hi_parts.append(_FREE_TIE_M - sep)
         lo = np.concatenate(lo_parts)
         hi = np.concatenate(hi_parts)

@@ -8,12 +8,21 @@ import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
 
+#: Bounds on a push, far beyond the paper's pushes (10-100 N for 0.2 s, i.e. 2-20 N s) yet
+#: ruling out forces that only make the simulation diverge. 100 N s gives the 16 kg
+#: humanoid 6 m/s and the 10 kg biped 10 m/s: no controller can recover from more.
+MAX_PUSH_FORCE_N = 1000.0  # force magnitude [N]
+MAX_PUSH_DURATION_S = 5.0  # duration [s]
+MAX_PUSH_IMPULSE_NS = 100.0  # impulse magnitude [N s]
+
 
 @dataclass(frozen=True)
 class Push:
     """A constant force ``force_world_n`` (3,) [N] at the trunk CoM during [t_s, t_s + duration_s).
 
-    The impulse is ``force_world_n * duration_s`` [N s].
+    The impulse is ``force_world_n * duration_s`` [N s]. The force magnitude is at most
+    :data:`MAX_PUSH_FORCE_N`, the duration at most :data:`MAX_PUSH_DURATION_S` and the
+    impulse magnitude at most :data:`MAX_PUSH_IMPULSE_NS`.
     """
 
     t_s: float
@@ -23,10 +32,24 @@ class Push:
     def __post_init__(self) -> None:
         if not (np.isfinite(self.t_s) and self.t_s >= 0):
             raise ConfigError("push.t", self.t_s, "a finite time >= 0 s")
-        if not (np.isfinite(self.duration_s) and self.duration_s > 0):
-            raise ConfigError("push.dur", self.duration_s, "a finite duration > 0 s")
+        if not (np.isfinite(self.duration_s) and 0 < self.duration_s <= MAX_PUSH_DURATION_S):
+            raise ConfigError(
+                "push.dur", self.duration_s, f"a duration in (0, {MAX_PUSH_DURATION_S:g}] s"
+            )
         if not np.all(np.isfinite(self.force_world_n)):
             raise ConfigError("push.f", self.force_world_n, "finite forces [N]")
+        force = float(np.linalg.norm(self.force_world_n))
+        if force > MAX_PUSH_FORCE_N:
+            raise ConfigError(
+                "push.force", self.force_world_n, f"a force magnitude <= {MAX_PUSH_FORCE_N:g} N"
+            )
+        impulse = force * self.duration_s
+        if impulse > MAX_PUSH_IMPULSE_NS:
+            raise ConfigError(
+                "push.impulse",
+                f"{impulse:g} N s ({force:g} N for {self.duration_s:g} s)",
+                f"an impulse magnitude <= {MAX_PUSH_IMPULSE_NS:g} N s",
+            )
 
     def active(self, t_s: float) -> bool:
         return self.t_s <= t_s < self.t_s + self.duration_s
@@ -51,6 +74,9 @@ class Push:
                 values[key] = float(raw)
             except ValueError:
                 raise ConfigError(f"--push {key}", raw, "a number") from None
+            if key in ("fx", "fy", "fz") and not abs(values[key]) <= MAX_PUSH_FORCE_N:
+                bound = f"{MAX_PUSH_FORCE_N:g}"
+                raise ConfigError(f"--push {key}", values[key], f"a force in [-{bound}, {bound}] N")
         for key in ("t", "dur"):
             if key not in values:
                 raise ConfigError("--push", text, f"a value for '{key}'")

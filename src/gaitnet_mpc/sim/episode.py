@@ -59,7 +59,11 @@ class VideoConfig:
 
 @dataclass
 class EpisodeLog:
-    """Per-tick time series, kept in memory and written as CSV."""
+    """Per-tick time series, kept in memory and written as CSV.
+
+    ``self_contact`` is 1 on ticks where two robot geoms touch (see
+    :class:`~gaitnet_mpc.sim.simulator.SelfCollisionStats`), else 0.
+    """
 
     columns: tuple[str, ...] = (
         "t_s",
@@ -89,6 +93,7 @@ class EpisodeLog:
         "mpc_n_qps",
         "mpc_solve_ms",
         "stance_foot",
+        "self_contact",
     )
     rows: list[np.ndarray] = field(default_factory=list)
 
@@ -240,8 +245,14 @@ def _draw_footholds(scene: Any, footholds: list[tuple[str, np.ndarray]], height_
 
 
 def _log_row(
-    state: Any, cmd: Command, tau: np.ndarray, tau_limit: np.ndarray, probe: _MPCProbe
+    state: Any,
+    cmd: Command,
+    tau: np.ndarray,
+    tau_limit: np.ndarray,
+    probe: _MPCProbe,
+    self_contact: bool,
 ) -> np.ndarray:
+    """One row of :class:`EpisodeLog` (columns in its order)."""
     tau_abs = np.abs(tau)
     return np.concatenate(
         [
@@ -255,6 +266,7 @@ def _log_row(
             state.h_measured,
             [tau_abs.max(), (tau_abs / tau_limit).max()],
             [probe.step_dt(), probe.last_qps, probe.last_ms, probe.stance_code()],
+            [float(self_contact)],
         ]
     )
 
@@ -313,7 +325,7 @@ def run_episode(
             state = sim.state()
             tau = controller.compute(state)
             probe.after_compute(state.t_s)
-            log.rows.append(_log_row(state, command, tau, tau_limit, probe))
+            log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
             sim.step(tau)
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
                 t_r = time.perf_counter()
@@ -393,6 +405,14 @@ def _summarise(
     wall_s: float,
     render_wall_s: float,
 ) -> dict[str, Any]:
+    """The ``summary.json`` fields.
+
+    ``fell`` / ``fall_time_s`` / ``fall_reason``: how the episode ended early; ``diverged``
+    is true when that was a numerical divergence of the simulation (reason ``"simulation
+    diverged: ..."``). ``self_collisions``: ticks with a contact between two robot geoms;
+    ``self_collision_first_t_s`` (null if none), ``self_collision_max_depth_m`` and
+    ``self_collision_pairs`` (sorted ``"bodyA/bodyB"``) describe them.
+    """
     rows = np.asarray(log.rows)
     t = rows[:, 0]
     sim_s = float(sim.time_s)
@@ -410,6 +430,7 @@ def _summarise(
         "fell": sim.fall.fell,
         "fall_time_s": sim.fall.t_s,
         "fall_reason": sim.fall.reason or None,
+        "diverged": sim.diverged,
         "distance_m": distance,
         "lateral_drift_m": float(final.com_world_m[1] - com0[1]),
         "mean_speed_mps": distance / sim_s if sim_s > 0 else 0.0,
@@ -422,4 +443,5 @@ def _summarise(
         "render_time_s": render_wall_s,
         "torque_limits_nm": sorted({float(x) for x in sim.model.actuator_ctrlrange[:, 1]}),
         "realtime_factor": sim_s / wall_s if wall_s > 0 else None,
+        **sim.self_collisions.to_dict(),
     }

@@ -1,7 +1,8 @@
 """MuJoCo simulation of one robot on one terrain course at 1 kHz.
 
 Joint torques are saturated at the actuator limits. The simulator applies pushes and an
-unknown payload, reads out :class:`RobotState`, detects falls and logs every touchdown.
+unknown payload, reads out :class:`RobotState`, detects falls and divergence of the
+simulation, counts self-collisions and logs every touchdown.
 """
 
 from __future__ import annotations
@@ -37,19 +38,60 @@ _VISUAL_XML = """
 """
 
 
+#: Largest payload any :class:`SimConfig` accepts [kg]; :class:`Simulator` further limits it
+#: to the robot's own mass (16 kg humanoid3d, 10 kg biped2d).
+MAX_PAYLOAD_KG = 50.0
+
+#: MuJoCo warnings that mean the state became non-finite or huge (|x| > 1e10). MuJoCo then
+#: resets ``mjData`` (time included) and goes on, so they are detected by their counters.
+#: CONTACTFULL / CNSTRFULL (arena full) and INERTIA / BADCTRL are not divergence.
+_DIVERGENCE_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
+
+
+def check_payload(
+    payload_kg: float, robot_mass_kg: float | None = None, field: str = "payload_kg"
+) -> None:
+    """Raise :class:`ConfigError` unless ``0 <= payload_kg <= min(robot_mass_kg, 50 kg)``.
+
+    A payload as heavy as the robot itself is already far beyond the unknown loads a
+    controller is expected to carry (a few kg); more would make the actuators, not the
+    controller, the limit. Without ``robot_mass_kg`` only :data:`MAX_PAYLOAD_KG` applies.
+    """
+    if robot_mass_kg is None or robot_mass_kg >= MAX_PAYLOAD_KG:
+        bound, why = MAX_PAYLOAD_KG, ""
+    else:
+        bound, why = robot_mass_kg, " (at most the robot's own mass)"
+    if not (np.isfinite(payload_kg) and 0 <= payload_kg <= bound):
+        raise ConfigError(field, payload_kg, f"a mass in [0, {bound:g}] kg{why}")
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Simulator settings.
 
     Attributes:
         timestep_s: physics and control period [s] (1 kHz).
-        payload_kg: mass added to the trunk at its CoM that no controller is told about [kg].
+        payload_kg: mass added to the trunk at its CoM that no controller is told about
+            [kg], in [0, 50] (and at most the robot's own mass, checked by the simulator).
         pushes: impulses applied at the trunk CoM.
         fall_com_height_ratio: a fall is declared when the CoM height above the start ground
             drops below this fraction of its nominal standing height.
         fall_tilt_rad: a fall is declared when the trunk's z axis tilts more than this.
         touchdown_min_air_s: a foot must have been airborne this long for a new contact
             to count as a touchdown (debounces contact chatter) [s].
+        max_trunk_speed_mps: a trunk linear speed above this means the simulation diverged
+            [m/s]. 20 m/s is the speed of a free fall from 20 m, 13x the fastest command
+            (1.5 m/s) and 5x the speed of a 0.65 m trunk falling to the ground; the largest
+            accepted push (100 N s) adds 6 m/s to the 16 kg humanoid.
+        max_joint_speed_radps: a joint speed, or a trunk angular speed, above this means
+            the simulation diverged [rad/s]. 500 rad/s (4800 rpm at the joint) is 12-25x
+            the no-load speed of legged-robot actuators (20-40 rad/s) and 2.5x the fastest
+            joint seen in this simulator, whose motors have no torque-speed limit: 200 rad/s
+            at the knee or elbow under torques switching between the limits.
     """
 
     timestep_s: float = 0.001
@@ -58,12 +100,19 @@ class SimConfig:
     fall_com_height_ratio: float = 0.5
     fall_tilt_rad: float = 1.0
     touchdown_min_air_s: float = 0.03
+    max_trunk_speed_mps: float = 20.0
+    max_joint_speed_radps: float = 500.0
 
     def __post_init__(self) -> None:
         if not (0 < self.timestep_s <= 0.01):
             raise ConfigError("timestep_s", self.timestep_s, "a value in (0, 0.01] s")
-        if not (np.isfinite(self.payload_kg) and self.payload_kg >= 0):
-            raise ConfigError("payload_kg", self.payload_kg, "a finite mass >= 0 kg")
+        check_payload(self.payload_kg)
+        for name, value in (
+            ("max_trunk_speed_mps", self.max_trunk_speed_mps),
+            ("max_joint_speed_radps", self.max_joint_speed_radps),
+        ):
+            if not (np.isfinite(value) and value > 0):
+                raise ConfigError(name, value, "a finite bound > 0")
 
 
 @dataclass(frozen=True)
@@ -88,9 +137,42 @@ class Foothold:
 
 @dataclass
 class FallStatus:
+    """Whether and when the episode ended early, and why.
+
+    ``diverged`` marks a numerical divergence of the simulation (reason
+    ``"simulation diverged: ..."``) rather than a fall of the robot.
+    """
+
     fell: bool = False
     t_s: float | None = None
     reason: str = ""
+    diverged: bool = False
+
+
+@dataclass
+class SelfCollisionStats:
+    """Contacts between two robot geoms over an episode.
+
+    Attributes:
+        ticks: simulation ticks with at least one self-contact.
+        first_t_s: time of the first such tick [s]; None if there was none.
+        max_depth_m: largest penetration depth of a self-contact [m] (0 if none).
+        body_pairs: the pairs of bodies that touched, each as a name-sorted tuple.
+    """
+
+    ticks: int = 0
+    first_t_s: float | None = None
+    max_depth_m: float = 0.0
+    body_pairs: set[tuple[str, str]] = field(default_factory=set)
+
+    def to_dict(self) -> dict[str, object]:
+        """The ``self_collision*`` fields of ``summary.json``."""
+        return {
+            "self_collisions": self.ticks,
+            "self_collision_first_t_s": self.first_t_s,
+            "self_collision_max_depth_m": self.max_depth_m,
+            "self_collision_pairs": sorted(f"{a}/{b}" for a, b in self.body_pairs),
+        }
 
 
 def build_scene_xml(robot: RobotModel, course: Course) -> str:
@@ -109,6 +191,7 @@ class Simulator:
     config: SimConfig = field(default_factory=SimConfig)
 
     def __post_init__(self) -> None:
+        check_payload(self.config.payload_kg, self.robot.total_mass_kg)
         self.model = mujoco.MjModel.from_xml_string(build_scene_xml(self.robot, self.course))
         self.model.opt.timestep = self.config.timestep_s
         trunk = self.model.body(self.robot.spec.trunk_body).id
@@ -124,9 +207,24 @@ class Simulator:
             m.geom(name).id: f for f in FEET for name in self.robot.spec.foot_geoms[f]
         }
         self._foot_sites = {f: m.site(self.robot.spec.foot_sites[f]).id for f in FEET}
+        #: geom id -> whether it belongs to the robot (its body is not the world body)
+        self._robot_geom = m.geom_bodyid != 0
+        self._body_names = [m.body(b).name for b in range(m.nbody)]
+        self._self_body_ids: set[tuple[int, int]] = set()
         self._act_limit = m.actuator_ctrlrange[:, 1].copy()
+        r = self.robot
+        self._lin_dofs = slice(0, 2) if r.spec.planar else slice(0, 3)
+        self._ang_dofs = slice(2, 3) if r.spec.planar else slice(3, 6)
+        self._joint_dofs = np.asarray(r.joint_dof_adr)
+        self._warn_ids = np.array([int(w) for w in _DIVERGENCE_WARNINGS])
+        self._good_qpos = np.zeros(m.nq)
+        self._good_qvel = np.zeros(m.nv)
+        self._good_act = np.zeros(m.na)
         self.footholds: list[Foothold] = []
         self.fall = FallStatus()
+        self.self_collisions = SelfCollisionStats()
+        #: whether the current state has a self-contact (for the per-tick log)
+        self.self_contact = False
         self._last_contact_t = dict.fromkeys(FEET, -np.inf)
         self._in_contact = dict.fromkeys(FEET, True)
         self.reset()
@@ -145,6 +243,10 @@ class Simulator:
         self._com_height0_m = float(self.data.subtree_com[self._trunk_id, 2] - ground)
         self.footholds.clear()
         self.fall = FallStatus()
+        self.self_collisions = SelfCollisionStats()
+        self._self_body_ids.clear()
+        self.self_contact = self._self_contacts() is not None
+        self._save_good_state()
         self._in_contact = dict.fromkeys(FEET, True)
         self._last_contact_t = dict.fromkeys(FEET, 0.0)
         return self.state()
@@ -153,8 +255,19 @@ class Simulator:
     def time_s(self) -> float:
         return float(self.data.time)
 
+    @property
+    def diverged(self) -> bool:
+        """Whether the simulation diverged (which also ended the episode as a fall)."""
+        return self.fall.diverged
+
     def step(self, tau_nm: np.ndarray) -> None:
-        """Apply joint torques (saturated at the limits) for one timestep."""
+        """Apply joint torques (saturated at the limits) for one timestep.
+
+        If the step diverges (see :meth:`_divergence`), the episode ends as a fall with
+        reason ``"simulation diverged: ..."`` at the tick's end time, and ``qpos``, ``qvel``
+        and ``act`` are rolled back to the last state that passed the checks (normally the
+        one before the step), so that the summary's distance and speed stay meaningful.
+        """
         tau = np.asarray(tau_nm, dtype=float)
         if tau.shape != (self.model.nu,):
             raise ConfigError("tau_nm", tau.shape, f"shape ({self.model.nu},)")
@@ -167,8 +280,66 @@ class Simulator:
             if push.active(t):
                 force += push.force_world_n
         self.data.xfrc_applied[self._trunk_id, :3] = force
+        warnings0 = self.data.warning.number[self._warn_ids].copy()
         mujoco.mj_step(self.model, self.data)
-        self._update_contacts_and_falls()
+        t_end = t + self.model.opt.timestep
+        reason = self._divergence(t, warnings0)
+        if reason is None:
+            self._save_good_state()
+            self._update_contacts_and_falls()
+        elif not self.fall.fell:
+            self._roll_back(t_end)
+            self.fall = FallStatus(True, t_end, f"simulation diverged: {reason}", diverged=True)
+
+    # -------------------------------------------------------------- divergence
+    def _divergence(self, t_before_s: float, warnings_before: np.ndarray) -> str | None:
+        """Why the step that started at ``t_before_s`` diverged, or None if it did not.
+
+        Checks MuJoCo's BADQPOS / BADQVEL / BADQACC counters (MuJoCo resets the state when
+        it raises them, so the clock going back is checked too), non-finite ``qpos`` /
+        ``qvel`` / ``qacc``, and the speed bounds of :class:`SimConfig`.
+        """
+        d, cfg = self.data, self.config
+        raised = np.flatnonzero(d.warning.number[self._warn_ids] != warnings_before)
+        if raised.size:
+            w = mujoco.mjtWarning(int(self._warn_ids[raised[0]]))
+            info = int(d.warning.lastinfo[int(w)])
+            name = w.name.removeprefix("mjWARN_")
+            return f"MuJoCo warning {name} (DOF {info}) at t = {t_before_s:.3f} s"
+        if d.time < t_before_s + 0.5 * self.model.opt.timestep:
+            return f"MuJoCo reset the state at t = {t_before_s:.3f} s"
+        qvel = d.qvel
+        if not np.isfinite(d.qpos.sum() + qvel.sum() + d.qacc.sum()):  # fast path first
+            for name, x in (("qpos", d.qpos), ("qvel", qvel), ("qacc", d.qacc)):
+                if not np.all(np.isfinite(x)):
+                    return f"non-finite {name} at t = {t_before_s:.3f} s"
+        lin, ang = qvel[self._lin_dofs], qvel[self._ang_dofs]
+        v = float(np.sqrt(lin @ lin))
+        if v > cfg.max_trunk_speed_mps:
+            return f"trunk speed {v:.3g} m/s above {cfg.max_trunk_speed_mps:g} m/s"
+        w_max = max(float(np.sqrt(ang @ ang)), float(np.abs(qvel[self._joint_dofs]).max()))
+        if w_max > cfg.max_joint_speed_radps:
+            bound = cfg.max_joint_speed_radps
+            return f"joint or trunk angular speed {w_max:.3g} rad/s above {bound:g} rad/s"
+        return None
+
+    def _save_good_state(self) -> None:
+        """Keep the current state as the last one that passed the divergence checks."""
+        d = self.data
+        np.copyto(self._good_qpos, d.qpos)
+        np.copyto(self._good_qvel, d.qvel)
+        np.copyto(self._good_act, d.act)
+
+    def _roll_back(self, t_s: float) -> None:
+        """Restore the last state that passed the checks, with the clock at ``t_s``."""
+        d = self.data
+        d.qpos[:] = self._good_qpos
+        d.qvel[:] = self._good_qvel
+        d.act[:] = self._good_act
+        d.time = t_s
+        d.xfrc_applied[:] = 0.0
+        mujoco.mj_forward(self.model, d)
+        self.self_contact = self._self_contacts() is not None
 
     # ---------------------------------------------------------------- read-out
     def _contacts(self) -> tuple[dict[str, np.ndarray], set[str], bool]:
@@ -200,9 +371,40 @@ class Simulator:
             wrench[foot][3:] += np.cross(r, f_world)
         return wrench, touching, other
 
+    def _self_contacts(self) -> np.ndarray | None:
+        """Indices into ``data.contact`` of active contacts between two robot geoms."""
+        d = self.data
+        if d.ncon == 0:
+            return None
+        con = d.contact
+        mask = self._robot_geom[con.geom].all(axis=1) & (con.exclude == 0)
+        return np.flatnonzero(mask) if mask.any() else None
+
+    def _update_self_collisions(self) -> None:
+        """Record this tick's self-contacts in :attr:`self_collisions`."""
+        idx = self._self_contacts()
+        self.self_contact = idx is not None
+        if idx is None:
+            return
+        stats = self.self_collisions
+        stats.ticks += 1
+        if stats.first_t_s is None:
+            stats.first_t_s = self.time_s
+        con = self.data.contact
+        depth = -float(con.dist[idx].min())
+        stats.max_depth_m = max(stats.max_depth_m, depth)
+        bodies = self.model.geom_bodyid[con.geom[idx]]
+        for b1, b2 in bodies:
+            key = (int(min(b1, b2)), int(max(b1, b2)))
+            if key not in self._self_body_ids:
+                self._self_body_ids.add(key)
+                n1, n2 = sorted((self._body_names[key[0]], self._body_names[key[1]]))
+                stats.body_pairs.add((n1, n2))
+
     def _update_contacts_and_falls(self) -> None:
         d = self.data
         t = self.time_s
+        self._update_self_collisions()
         _, touching, other = self._contacts()
         for foot in FEET:
             now = foot in touching
