@@ -38,9 +38,13 @@ SCENARIOS: tuple[Scenario, ...] = (
 )
 
 
-def run(scenario: Scenario) -> dict:
+#: Presets run side by side: the tuned default and the paper's settings (kd_walk.KD_PRESETS).
+PRESETS = ("default", "paper")
+
+
+def run(job: tuple[str, Scenario]) -> dict:
     from gaitnet_mpc.control.kd_walk import (
-        KDWalkConfig,
+        KD_PRESETS,
         KDWalkController,
         preview_walk_config,
         walk_terrain,
@@ -51,44 +55,52 @@ def run(scenario: Scenario) -> dict:
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
-    label, robot_name, course_name, vx, dt, duration, preview = scenario
+    preset, (label, robot_name, course_name, vx, dt, duration, preview) = job
     robot = load_robot(robot_name)
     course = load_course(course_name)
     command = Command(vx_mps=vx)
-    config = preview_walk_config() if preview else KDWalkConfig()
+    config = KD_PRESETS[preset](robot.spec.planar)
+    if preview:
+        config = preview_walk_config(config)
     ctrl = KDWalkController(
         robot, walk_terrain(course, config), command, dt_policy=FixedDt(dt), config=config
     )
     summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
-    return {"label": label, **summary}
+    return {"label": label, "preset": preset, **summary}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
+    jobs = [(preset, scenario) for scenario in SCENARIOS for preset in PRESETS]
     with ProcessPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(run, SCENARIOS))
+        results = list(pool.map(run, jobs))
     lines = [
         "# kd controller: closed-loop outcomes",
         "",
         machine_info(("numpy", "mujoco", "pin", "piqp")),
         "",
-        "| scenario | fell | fall t [s] | distance [m] | speed RMSE [m/s] | lateral drift [m] | "
-        "touchdowns | violations | QPs/full solve | QPs/replan | full ms (median) | "
-        "replan ms (median) | hit j_max | RTF |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "Self-collision on. Presets: `default` (tuned) and `paper` (`--preset paper`: Table "
+        "VIII / Table V weights and limits, none of the additions listed in the README's "
+        "deviations table; with `--preview` rows it gets the preview and the lateral return).",
+        "",
+        "| scenario | preset | fell | fall t [s] | distance [m] | speed RMSE [m/s] | "
+        "lateral drift [m] | touchdowns | violations | leg-leg contact ticks | "
+        "QPs/full solve | QPs/replan | full ms (median) | replan ms (median) | hit j_max | RTF |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         m = r["mpc"]
         rmse = r["speed_rmse_mps"]
-        hit = 1.0 - m["converged_fraction"]
+        hit = 1.0 - m.get("converged_fraction", float("nan"))
         fall_t = f"{r['fall_time_s']:.2f}" if r["fell"] else "-"
+        rmse_s = "-" if rmse is None else f"{rmse:.3f}"
         lines.append(
-            f"| {r['label']} | {'yes' if r['fell'] else 'no'} | "
+            f"| {r['label']} | {r['preset']} | {'yes' if r['fell'] else 'no'} | "
             f"{fall_t} | {r['distance_m']:.2f} | "
-            f"{rmse:.3f} | {r['lateral_drift_m']:+.2f} | {len(r['footholds'])} | "
-            f"{r['foothold_violations']} | "
+            f"{rmse_s} | {r['lateral_drift_m']:+.2f} | {len(r['footholds'])} | "
+            f"{r['foothold_violations']} | {r['self_collisions']} | "
             f"{m.get('qps_per_full_mean', float('nan')):.1f} | "
             f"{m.get('qps_per_replan_mean', float('nan')):.1f} | "
             f"{m.get('full_ms_median', float('nan')):.0f} | "
@@ -98,7 +110,8 @@ def main() -> None:
     lines += [
         "",
         "Commands: the same scenario with the CLI is `gaitnet-mpc run --controller kd "
-        "--robot ROBOT --course COURSE --vx VX --dt DT --duration T [--preview]`.",
+        "--robot ROBOT --course COURSE --vx VX --dt DT --duration T [--preview] "
+        "[--preset paper]`. This table: `.venv/bin/python benchmarks/kd_runs.py --jobs 2`.",
         "",
         "Solve times and RTF are wall times on a shared machine and move with its load; "
         "`results/kd_solve.md` compares solver versions in one interleaved run.",
@@ -106,7 +119,9 @@ def main() -> None:
     ]
     report = "\n".join(lines)
     out = Path(__file__).parent / "results" / "kd_runs.md"
-    out.write_text(report)
+    tmp = out.with_suffix(".md.part")
+    tmp.write_text(report)
+    tmp.replace(out)
     print(report)
 
 

@@ -314,3 +314,26 @@ def test_bad_iterate_and_bounds_raise_config_error(sub: KDSubproblem) -> None:
         KDConfig(horizon=0)
     with pytest.raises(ConfigError, match="w_p_com"):
         KDConfig(w_p_com=(1.0, 2.0))
+
+
+def test_foot_separation_row_keeps_the_touchdown_beside_the_stance_foot() -> None:
+    """With ``min_foot_separation_m``, a right foot whose (heavily weighted) reference lies
+    left of the left stance foot lands ``d_min`` to its right in the heading frame, at a 0.3
+    rad heading too; without the row the plan puts the feet closer."""
+    args, pc0 = walking_problem()
+    d_min = 0.06
+    for yaw in (0.0, 0.3):
+        rot = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]])
+        a = dict(args)
+        p_ref = args["p_foot_ref"].copy()
+        p_ref[:, 1] = [0.12, 0.12, 0.0]  # right foot planned 4 cm left of the left foot
+        a["p_foot_ref"] = p_ref @ rot.T
+        a["foot_yaw_rad"] = np.full((H, 2), yaw)
+        plans = {}
+        for sep in (None, d_min):
+            cfg = KDConfig(mass_kg=MASS, w_p_foot=(1e4, 1e4, 1e4), min_foot_separation_m=sep)
+            plans[sep], _, _ = converge(KDSubproblem(cfg), a, pc0)
+        n_y = np.array([-np.sin(yaw), np.cos(yaw)])
+        lateral = {s: (p.p_foot[:, 0, :2] - p.p_foot[:, 1, :2]) @ n_y for s, p in plans.items()}
+        assert lateral[None].min() < d_min - 0.005  # closer than d_min without the row
+        assert lateral[d_min].min() >= d_min - 1e-6

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -75,12 +77,38 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
     summary = run_episode(sim, ctrl, command, 3.5, progress=False)
     assert not summary["fell"]
     assert summary["foothold_violations"] == 0
+    assert summary["self_collisions"] == 0
     assert summary["distance_m"] > 1.1  # past the gap's far edge (0.9 m) by a margin
     assert any(f["pos_m"][0] > 0.95 for f in summary["footholds"])
     assert summary["mpc"]["converged_fraction"] > 0.9
     holds = ctrl.planned_footholds()  # the next touchdown of each foot (drawn in videos)
     assert sorted(f for f, _ in holds) == ["left", "right"]
     assert all(p[0] > summary["distance_m"] - 0.3 for _, p in holds)
+
+
+@pytest.mark.slow
+def test_kd_crosses_the_20cm_gap_with_the_legs_apart(humanoid) -> None:
+    """Closed loop, the built-in 20 cm gap at 0.75 m/s and dt 0.065: no fall, no foothold
+    in the gap, no leg-leg contact, and the feet at least ``min_foot_separation_m`` apart
+    sideways at every touchdown (the CMPC's separation row, beside eq. 24)."""
+    from gaitnet_mpc.mpc.sequential import FixedDt
+
+    course = load_course("gap")
+    command = Command(vx_mps=0.75)
+    sim = Simulator(humanoid, course)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, dt_policy=FixedDt(0.065))
+    summary = run_episode(sim, ctrl, command, 4.0, progress=False)
+    assert not summary["fell"]
+    assert summary["foothold_violations"] == 0
+    assert summary["self_collisions"] == 0
+    assert summary["distance_m"] > 2.3  # well past the gap (1.5-1.7 m)
+    holds = summary["footholds"]
+    lateral = [
+        (b["pos_m"][1] - a["pos_m"][1]) * (1 if b["foot"] == "left" else -1)
+        for a, b in itertools.pairwise(holds)
+        if a["foot"] != b["foot"]
+    ]
+    assert min(lateral) > humanoid.min_foot_separation_m - 0.01  # landing error allowed
 
 
 def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
@@ -169,6 +197,7 @@ def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
     summary = run_episode(sim, ctrl, command, 7.0, progress=False)
     assert not summary["fell"]
     assert summary["foothold_violations"] == 0
+    assert summary["self_collisions"] == 0  # legs never touch (self-collision is on)
     final_platform = course.patches[-1]
     assert sim.state().com_world_m[0] > final_platform.x_min + 0.2
     on_lanes = [f for f in summary["footholds"] if 1.2 < f["pos_m"][0] < 3.0]

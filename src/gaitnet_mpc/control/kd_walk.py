@@ -29,8 +29,8 @@ from gaitnet_mpc.gait import (
     RaibertHeuristic,
     SwingConfig,
     SwingTrajectory,
+    keep_beside_stance,
 )
-from gaitnet_mpc.gait.foothold import keep_beside_stance
 from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
@@ -608,8 +608,7 @@ class KDWalkController(Controller):
                 swing,
                 state.foot_pos_world_m[stance],
                 yaw,
-                self.robot.min_foot_separation_m
-                + self.robot.spec.foot_toe_m * abs(np.sin(state.foot_yaw_rad[stance] - yaw)),
+                self.robot.foot_separation_m(state.foot_yaw_rad[stance] - yaw),
             )
         target = {swing: (p_swing, self.swing.velocity(t), self.swing.acceleration(t))}
         return self.low.torques(state, wrench, target, yaw)

@@ -63,6 +63,7 @@ from gaitnet_mpc.gait import (
     RaibertHeuristic,
     SwingConfig,
     SwingTrajectory,
+    keep_beside_stance,
 )
 from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
@@ -471,10 +472,19 @@ class WalkingController(Controller):
             z = self.ground_z + self.robot.spec.foot_contact_radius_m - LATE_DEPTH_M
             v = np.array([0.0, 0.0, -self.config.swing.touchdown_speed_mps])
             target[stance] = (np.array([*self.late_xy, z]), v)
-        elif not self.landed and self.swing is not None:
-            t_swing = sched.time_in_step_s - self.swing_t0_s
-            target[swing] = (self.swing.position(t_swing), self.swing.velocity(t_swing))
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
+        if not self.late and not self.landed and self.swing is not None:
+            t_swing = sched.time_in_step_s - self.swing_t0_s
+            p_swing = self.swing.position(t_swing)
+            if yaw is not None:  # never sweep through the stance leg
+                p_swing = keep_beside_stance(
+                    p_swing,
+                    swing,
+                    state.foot_pos_world_m[stance],
+                    yaw,
+                    self.robot.foot_separation_m(state.foot_yaw_rad[stance] - yaw),
+                )
+            target[swing] = (p_swing, self.swing.velocity(t_swing))
         tau = self.low.torques(state, wrench, target, yaw)
         if self.config.stance_gravity_ff and wrench:
             r = self.robot

@@ -7,7 +7,7 @@
 * :class:`LandingBias` - averaged swing landing error, subtracted from later swing aims.
 """
 
-from gaitnet_mpc.gait.foothold import RaibertConfig, RaibertHeuristic
+from gaitnet_mpc.gait.foothold import RaibertConfig, RaibertHeuristic, keep_beside_stance
 from gaitnet_mpc.gait.landing import LandingBias
 from gaitnet_mpc.gait.schedule import (
     GaitHorizon,
@@ -29,5 +29,6 @@ __all__ = [
     "StepRecord",
     "SwingConfig",
     "SwingTrajectory",
+    "keep_beside_stance",
     "obstacle_array",
 ]

@@ -122,6 +122,14 @@ class RobotModel:
             half.append(max(widths))
         return sum(half) + spec.leg_clearance_m
 
+    def foot_separation_m(self, yaw_offset_rad: float) -> float | None:
+        """:attr:`min_foot_separation_m` plus the lateral sweep of a foot yawed by
+        ``yaw_offset_rad`` against the other, ``max(toe, heel) |sin(yaw_offset)|`` [m]."""
+        d = self.min_foot_separation_m
+        if d is None:
+            return None
+        return d + max(self.spec.foot_toe_m, self.spec.foot_heel_m) * abs(np.sin(yaw_offset_rad))
+
     # ------------------------------------------------------------ conversions
     def mj_to_pin(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """MuJoCo (qpos, qvel) -> Pinocchio (q, v); see the module docstring."""

@@ -1,0 +1,49 @@
+"""What a walking controller knows about the terrain (control/terrain_view.py)."""
+
+from __future__ import annotations
+
+import pytest
+
+from gaitnet_mpc.control.kd_walk import KDWalkController, preview_walk_config, walk_terrain
+from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.robots import load_robot
+from gaitnet_mpc.sim.episode import Command
+from gaitnet_mpc.terrain import load_course
+
+
+def test_one_step_view_refuses_the_whole_course() -> None:
+    view = TerrainView(load_course("stepping-stones"))
+    with pytest.raises(ConfigError, match=r"terrain_knowledge\.multi_step"):
+        view.course_for_multi_step_preview()
+    multi = TerrainView(load_course("stepping-stones"), TerrainKnowledge(multi_step=True))
+    assert multi.course_for_multi_step_preview().name == "stepping-stones"
+
+
+def test_obstacle_heights_are_part_of_the_preview_unless_turned_off() -> None:
+    course = load_course("obstacle")
+    (box,) = TerrainView(course).swing_obstacles(1.7, 1.3)  # either order
+    assert box.z_top_m == pytest.approx(0.03)
+    blind = TerrainView(course, TerrainKnowledge(obstacle_heights=False))
+    assert blind.swing_obstacles(1.3, 1.7) == []
+    assert TerrainView(course).swing_obstacles(0.0, 1.0) == []  # none in that swing
+
+
+def test_foothold_height_over_a_patch_and_a_hole() -> None:
+    view = TerrainView(load_course("gap"))
+    assert view.foothold_height_m(1.0, 0.0, default_m=-1.0) == 0.0
+    assert view.foothold_height_m(1.6, 0.0, default_m=-1.0) == -1.0  # in the gap
+
+
+def test_knowledge_is_recorded_and_the_preview_needs_the_multi_step_view() -> None:
+    assert TerrainKnowledge().to_dict() == {
+        "preview": "one-step",
+        "multi_step": False,
+        "obstacle_heights": True,
+    }
+    robot, course, cmd = load_robot("humanoid3d"), load_course("flat"), Command(0.5)
+    cfg = preview_walk_config()
+    with pytest.raises(ConfigError, match="multi_step"):
+        KDWalkController(robot, TerrainView(course), cmd, config=cfg)
+    ctrl = KDWalkController(robot, walk_terrain(course, cfg), cmd, config=cfg)
+    assert ctrl.terrain_knowledge()["preview"] == "multi-step"
