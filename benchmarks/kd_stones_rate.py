@@ -78,13 +78,13 @@ def run(job: Job) -> dict:
     }
 
 
-def _jobs(args: argparse.Namespace, dts: list[float], courses: list[str]) -> list[Job]:
+def _jobs(args: argparse.Namespace, dts: dict[str, list[float]]) -> list[Job]:
     jobs: list[Job] = []
     for name, preview in CONFIGS.items():
-        for course in courses:
+        for course in dts:
             if course == "gap" and preview:
                 continue  # the gap is the one-step preview's course
-            for dt in dts:
+            for dt in dts[course]:
                 if course == "stepping-stones":
                     jobs += [(name, course, None, dt, i) for i in range(1, args.runs + 1)]
                 jobs += [(name, course, s, dt, 0) for s in range(args.seeds)]
@@ -95,13 +95,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=10, help="perturbed built-in runs per cell")
     parser.add_argument("--seeds", type=int, default=20, help="seeded layouts per cell")
-    parser.add_argument("--dts", default="0.045,0.05,0.055")
+    parser.add_argument("--dts", default="0.05", help="fixed dts on the stepping stones [s]")
+    parser.add_argument("--gap-dts", default="0.045,0.055,0.065", help="fixed dts on the gap")
     parser.add_argument("--courses", default="stepping-stones,gap")
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
-    dts = [float(s) for s in args.dts.split(",")]
     courses = args.courses.split(",")
-    jobs = _jobs(args, dts, courses)
+    dts = {
+        c: [float(x) for x in (args.gap_dts if c == "gap" else args.dts).split(",")]
+        for c in courses
+    }
+    jobs = _jobs(args, dts)
     t0 = time.perf_counter()
     results: dict[Job, dict] = {}
     with ProcessPoolExecutor(args.jobs) as pool:
@@ -129,7 +133,7 @@ def main() -> None:
     for name in CONFIGS:
         for course in courses:
             for kind in ("built-in", "seeded"):
-                for dt in dts:
+                for dt in dts[course]:
                     rs = [
                         r
                         for (n, c, seed, d, _), r in results.items()
@@ -153,7 +157,7 @@ def main() -> None:
         "",
         f"{len(jobs)} episodes in {wall_s / 60:.1f} min on {args.jobs} processes. Command: "
         f"`.venv/bin/python benchmarks/kd_stones_rate.py --runs {args.runs} --seeds "
-        f"{args.seeds} --dts {args.dts} --courses {args.courses}`.",
+        f"{args.seeds} --dts {args.dts} --gap-dts {args.gap_dts} --courses {args.courses}`.",
         "",
     ]
     report = "\n".join(lines)
