@@ -24,7 +24,7 @@ demo: $(STAMP)
 		--course stepping-stones --vx 0.75 --dt 0.05 --preview --duration 6 \
 		--out runs/demo/stepping-stones-preview
 	MUJOCO_GL=egl $(VENV)/bin/gaitnet-mpc run --robot humanoid3d --controller kd --course gap \
-		--vx 0.75 --dt 0.065 --duration 6 --out runs/demo/gap
+		--vx 0.75 --dt 0.055 --duration 6 --out runs/demo/gap
 	$(VENV)/bin/gaitnet-mpc compare runs/demo/stepping-stones runs/demo/stepping-stones-preview \
 		runs/demo/gap --out runs/demo/compare
 

@@ -101,7 +101,10 @@ def episode(controller_name: str, direction: str, phase: str | None, force_n: fl
     pushes = (Push(push_t, (ux * force_n, uy * force_n, 0.0), PUSH_DUR_S),) if force_n > 0 else ()
     sim = Simulator(robot, course, SimConfig(pushes=pushes))
     t0 = time.perf_counter()
-    summary = run_episode(sim, ctrl, command, push_t + PUSH_DUR_S + AFTER_S, progress=False)
+    try:
+        summary = run_episode(sim, ctrl, command, push_t + PUSH_DUR_S + AFTER_S, progress=False)
+    except Exception as exc:  # the controller gave up during the episode: a failure
+        summary = {"fell": True, "fall_time_s": sim.time_s, "fall_reason": f"exception: {exc!r}"}
     wall = time.perf_counter() - t0
     # Where in its step the push really started, from the executed step log.
     phase_measured, swing_foot = "", ""
@@ -208,6 +211,8 @@ def _cell_text(r: dict | None) -> tuple[str, str]:
     """(survived force / impulse, first failing force) of one table cell."""
     if r is None:
         return "", ""
+    if "error" in r:
+        return "error", "error"
     if r["zero_fell"]:
         surv = "falls unpushed"
     else:
@@ -296,7 +301,7 @@ def report(results: list[dict], args: argparse.Namespace, wall_s: float) -> str:
             cmp = []
             for p in args.phases:
                 k, s = by_key.get(("kd", d, p)), by_key.get(("srbm", d, p))
-                if k is None or s is None:
+                if k is None or s is None or "error" in k or "error" in s:
                     continue
                 ks = -1.0 if k["zero_fell"] else k["survived_n"]
                 ss = -1.0 if s["zero_fell"] else s["survived_n"]
@@ -359,11 +364,17 @@ def main() -> None:
         for d in args.directions
     ]
     t0 = time.perf_counter()
-    results = []
+    results, errors = [], []
     with ProcessPoolExecutor(args.jobs) as pool:
         futures = [pool.submit(run_cell, cell) for cell in cells]
         for n_done, f in enumerate(as_completed(futures), 1):
-            r = f.result()
+            try:
+                r = f.result()
+            except Exception as exc:  # setup failed (e.g. a broken import): report, go on
+                c, d, p = cells[futures.index(f)][:3]
+                r = {"controller": c, "direction": d, "phase": p, "error": repr(exc)}
+                r.update(runs=[], wall_s=0.0)
+                errors.append(f"{c} {d} {p or '-'}: {exc!r}")
             r["f_max"] = args.f_max
             results.append(r)
             surv, failed = _cell_text(r)
@@ -375,6 +386,10 @@ def main() -> None:
             )
     wall = time.perf_counter() - t0
     text = report(results, args, wall)
+    if errors:
+        text += "\nCells that could not run (setup error):\n\n" + "".join(
+            f"* {e}\n" for e in errors
+        )
     buf = io.StringIO()
     writer = csv.DictWriter(buf, CSV_FIELDS, lineterminator="\n")
     writer.writeheader()

@@ -86,8 +86,9 @@ def _fmt(x: float | None, spec: str) -> str:
 def table(rows: list[tuple[str, dict]]) -> str:
     head = (
         "| scenario | fell | fall time [s] | distance [m] | lateral drift [m] | mean speed [m/s] "
-        "| speed RMSE [m/s] | footholds | MPC solve median / p99 [ms] | realtime factor |\n"
-        "|---|---|---|---|---|---|---|---|---|---|\n"
+        "| speed RMSE [m/s] | footholds | leg-leg contact ticks | MPC solve median / p99 [ms] "
+        "| realtime factor |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     lines = []
     for name, s in rows:
@@ -96,6 +97,7 @@ def table(rows: list[tuple[str, dict]]) -> str:
             f"| {name} | {'yes' if s['fell'] else 'no'} | {_fmt(s['fall_time_s'], '.2f')} "
             f"| {s['distance_m']:.2f} | {s['lateral_drift_m']:.2f} | {s['mean_speed_mps']:.3f} "
             f"| {_fmt(s['speed_rmse_mps'], '.3f')} | {len(s['footholds'])} "
+            f"| {s.get('self_collisions', '-')} "
             f"| {_fmt(mpc.get('solve_ms_median'), '.1f')} / {_fmt(mpc.get('solve_ms_p99'), '.1f')} "
             f"| {_fmt(s['realtime_factor'], '.2f')} |"
         )

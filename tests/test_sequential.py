@@ -88,20 +88,23 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
 
 @pytest.mark.slow
 def test_kd_crosses_the_20cm_gap_with_the_legs_apart(humanoid) -> None:
-    """Closed loop, the built-in 20 cm gap at 0.75 m/s and dt 0.065: no fall, no foothold
-    in the gap, no leg-leg contact, and the feet at least ``min_foot_separation_m`` apart
-    sideways at every touchdown (the CMPC's separation row, beside eq. 24)."""
+    """Closed loop, the built-in 20 cm gap at 0.75 m/s and dt 0.055, 6 s: no fall, no
+    foothold in the gap, no leg-leg contact, and the feet at least
+    ``min_foot_separation_m`` apart sideways at every touchdown (the CMPC's separation
+    row, beside eq. 24). Not every dt does this: at dt 0.065 the robot crosses but falls
+    at 5.6 s (``benchmarks/results/kd_runs.md``); the rate over seeded gaps is in
+    ``kd_stones_rate.md``."""
     from gaitnet_mpc.mpc.sequential import FixedDt
 
     course = load_course("gap")
     command = Command(vx_mps=0.75)
     sim = Simulator(humanoid, course)
-    ctrl = KDWalkController(humanoid, TerrainView(course), command, dt_policy=FixedDt(0.065))
-    summary = run_episode(sim, ctrl, command, 4.0, progress=False)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, dt_policy=FixedDt(0.055))
+    summary = run_episode(sim, ctrl, command, 6.0, progress=False)
     assert not summary["fell"]
     assert summary["foothold_violations"] == 0
     assert summary["self_collisions"] == 0
-    assert summary["distance_m"] > 2.3  # well past the gap (1.5-1.7 m)
+    assert summary["distance_m"] > 3.5  # well past the gap (1.5-1.7 m)
     holds = summary["footholds"]
     lateral = [
         (b["pos_m"][1] - a["pos_m"][1]) * (1 if b["foot"] == "left" else -1)
