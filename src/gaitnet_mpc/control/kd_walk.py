@@ -21,6 +21,7 @@ from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.contact import ContactParams
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
+from gaitnet_mpc.control.walking import swing_beside_stance
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
     GaitSchedule,
@@ -29,7 +30,6 @@ from gaitnet_mpc.gait import (
     RaibertHeuristic,
     SwingConfig,
     SwingTrajectory,
-    keep_beside_stance,
 )
 from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
@@ -603,12 +603,6 @@ class KDWalkController(Controller):
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         p_swing = self.swing.position(t)
         if yaw is not None and self.config.keep_feet_apart:
-            p_swing = keep_beside_stance(
-                p_swing,
-                swing,
-                state.foot_pos_world_m[stance],
-                yaw,
-                self.robot.foot_separation_m(state.foot_yaw_rad[stance] - yaw),
-            )
+            p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)
         target = {swing: (p_swing, self.swing.velocity(t), self.swing.acceleration(t))}
         return self.low.torques(state, wrench, target, yaw)

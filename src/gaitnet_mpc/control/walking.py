@@ -158,6 +158,22 @@ def lip_gains(z0_m: float, step_s: float, half_width_m: float) -> tuple[float, f
     return omega, k_v, half_width_m * (1.0 - t * t) / 2.0, cmd_scale
 
 
+def swing_beside_stance(
+    robot: RobotModel, state: RobotState, swing: str, p_swing_m: np.ndarray, heading_rad: float
+) -> np.ndarray:
+    """The swing target ``p_swing_m`` (3,) kept :meth:`RobotModel.foot_separation_m` on its
+    own side of the stance foot in the heading frame, so that a swing never sweeps through
+    the stance leg (:func:`~gaitnet_mpc.gait.foothold.keep_beside_stance`)."""
+    stance = FEET[1 - FEET.index(swing)]
+    return keep_beside_stance(
+        p_swing_m,
+        swing,
+        state.foot_pos_world_m[stance],
+        heading_rad,
+        robot.foot_separation_m(state.foot_yaw_rad[stance] - heading_rad),
+    )
+
+
 class WalkingController(Controller):
     """Gait schedule + LIP/Raibert footholds + swing + low-level control around an MPC.
 
@@ -476,14 +492,8 @@ class WalkingController(Controller):
         if not self.late and not self.landed and self.swing is not None:
             t_swing = sched.time_in_step_s - self.swing_t0_s
             p_swing = self.swing.position(t_swing)
-            if yaw is not None:  # never sweep through the stance leg
-                p_swing = keep_beside_stance(
-                    p_swing,
-                    swing,
-                    state.foot_pos_world_m[stance],
-                    yaw,
-                    self.robot.foot_separation_m(state.foot_yaw_rad[stance] - yaw),
-                )
+            if yaw is not None:
+                p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)
             target[swing] = (p_swing, self.swing.velocity(t_swing))
         tau = self.low.torques(state, wrench, target, yaw)
         if self.config.stance_gravity_ff and wrench:
