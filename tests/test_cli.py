@@ -164,3 +164,57 @@ def test_kd_preview_run_records_its_options(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["controller_options"] == {"dt_s": 0.055, "preview": True}
     assert not summary["fell"]
+
+
+def _stand_run(out: Path, *extra: str) -> int:
+    args = ["run", "--controller", "stand", "--duration", "0.05", "--no-progress"]
+    return main([*args, "--no-video", "--no-plots", "--out", str(out), *extra])
+
+
+def test_out_is_checked_before_the_simulation(tmp_path: Path, capsys) -> None:
+    """A file, a path under a file, and '' as --out fail at once (exit 2) with a named
+    error; nothing is simulated or written."""
+    a_file = tmp_path / "file.txt"
+    a_file.write_text("x")
+    for bad, expected in (
+        (a_file, "this path is a file"),
+        (a_file / "run", "is a file"),
+        (Path(""), "not empty"),
+    ):
+        assert _stand_run(bad) == 2
+        err = capsys.readouterr().err
+        assert "--out" in err and expected in err
+    assert a_file.read_text() == "x"
+
+
+def test_a_folder_with_a_run_is_refused_unless_overwrite(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    assert _stand_run(out) == 0
+    (out / "video.mp4").write_bytes(b"an old video")  # an artifact the new run will not make
+    before = (out / "summary.json").read_text()
+    assert _stand_run(out) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert (out / "summary.json").read_text() == before  # untouched
+    assert _stand_run(out, "--overwrite") == 0
+    assert not (out / "video.mp4").exists()  # only the new run's files remain
+    assert sorted(p.name for p in out.iterdir()) == ["course.json", "log.csv", "summary.json"]
+    (out / "notes.txt").write_text("mine")
+    assert _stand_run(out, "--overwrite") == 2  # never deletes what a run did not write
+    assert "notes.txt" in capsys.readouterr().err
+
+
+def test_default_run_folders_are_unique(tmp_path: Path, monkeypatch) -> None:
+    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
+
+    monkeypatch.chdir(tmp_path)
+    made = {
+        prepare_output_folder(None, option="--out", default_prefix="", artifacts=RUN_ARTIFACTS)
+        for _ in range(3)
+    }
+    assert len(made) == 3 and all(p.is_dir() and p.parent.name == "runs" for p in made)
+
+
+def test_duration_under_a_few_ticks_is_refused(tmp_path: Path, capsys) -> None:
+    assert main(["run", "--duration", "0.0004", "--out", str(tmp_path / "r")]) == 2
+    assert "--duration: got 0.0004" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -71,7 +72,17 @@ def _build_parser() -> argparse.ArgumentParser:
         help="seed of a randomised layout (uneven, stepping-stones, gap); without it the "
         "built-in layout",
     )
-    run.add_argument("--out", type=Path, default=None, help="run folder (default runs/<time>)")
+    run.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="run folder, new or empty (default: a new runs/<date-time>-<id>)",
+    )
+    run.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="allow --out to name a folder holding an earlier run; its files are removed first",
+    )
     run.add_argument("--no-video", action="store_true", help="skip the MP4 video")
     run.add_argument("--no-plots", action="store_true", help="skip the PNGs in plots/")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -156,20 +167,21 @@ def _run(args: argparse.Namespace) -> int:
     import time
 
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.disturbances import Push
     from gaitnet_mpc.sim.episode import Command, VideoConfig, run_episode
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
-    from gaitnet_mpc.terrain import load_course
+    from gaitnet_mpc.terrain import SEEDED_COURSES, load_course
 
+    if not (math.isfinite(args.duration) and args.duration >= 0.01):
+        raise ConfigError("--duration", args.duration, "a simulated time >= 0.01 s")
     if args.viewer:
         _check_viewer()
     command = Command(args.vx, args.vy, args.yaw_rate)
     pushes = tuple(Push.parse(p) for p in args.push)
     robot = load_robot(args.robot)
     check_payload(args.payload_kg, robot.total_mass_kg, "--payload-kg")
-    from gaitnet_mpc.terrain import SEEDED_COURSES
-
     params = {} if args.seed is None else {"seed": args.seed}
     if params and args.course not in SEEDED_COURSES:
         raise ConfigError(
@@ -193,7 +205,13 @@ def _run(args: argparse.Namespace) -> int:
         args.controller, ControllerContext(robot, course, command, options)
     )
     sim = Simulator(robot, course, SimConfig(payload_kg=args.payload_kg, pushes=pushes))
-    out = args.out or Path("runs") / time.strftime("%Y%m%d-%H%M%S")
+    out = prepare_output_folder(
+        args.out,
+        option="--out",
+        default_prefix="",
+        artifacts=RUN_ARTIFACTS,
+        overwrite=args.overwrite,
+    )
     meta = {
         "robot": robot.name,
         "controller": args.controller,
@@ -265,11 +283,17 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    import time
 
     from gaitnet_mpc.results.compare import compare_runs
+    from gaitnet_mpc.results.rundir import COMPARE_ARTIFACTS, prepare_output_folder
 
-    out = args.out or Path("runs") / time.strftime("compare-%Y%m%d-%H%M%S")
+    out = prepare_output_folder(
+        args.out,
+        option="--out",
+        default_prefix="compare-",
+        artifacts=COMPARE_ARTIFACTS,
+        overwrite=True,  # a comparison is cheap to remake; its own files are replaced
+    )
     paths = compare_runs(args.run_dirs, out)
     print(paths["markdown"].read_text(), end="")
     print(f"results in {out}/")

@@ -122,3 +122,75 @@ def save_figure_atomic(fig: Any, path: str | Path, dpi: int = 110) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+#: Files and folders a run writes into its run folder (``--overwrite`` removes these).
+RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, COURSE, VIDEO, "video.part.mp4", PLOTS_DIR)
+#: Files ``compare`` writes into its output folder.
+COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
+
+
+def prepare_output_folder(
+    path: Path | None,
+    *,
+    option: str,
+    default_prefix: str,
+    artifacts: tuple[str, ...],
+    overwrite: bool = False,
+) -> Path:
+    """Validate and create an output folder before any long work starts.
+
+    ``path`` None: a new folder ``runs/<default_prefix><date-time>-<6 hex digits>`` (unique
+    even for runs started in the same second). Otherwise the folder must be new, empty, or,
+    with ``overwrite``, hold only earlier ``artifacts`` (which are then removed, so it ends
+    up holding only the new results). It is created and checked to be writable.
+
+    Raises:
+        ConfigError: naming ``option``, the path and what was expected.
+    """
+    import shutil
+    import time
+    import uuid
+
+    if path is None:
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        path = Path("runs") / f"{default_prefix}{stamp}-{uuid.uuid4().hex[:6]}"
+    elif str(path).strip() in ("", "."):
+        raise ConfigError(option, str(path), "a folder path for the results (not empty, not '.')")
+    if path.exists() and not path.is_dir():
+        raise ConfigError(option, str(path), "a folder (this path is a file)")
+    for parent in path.parents:
+        if parent.exists() and not parent.is_dir():
+            raise ConfigError(option, str(path), f"a folder path ({parent} is a file)")
+    if path.is_dir() and any(path.iterdir()):
+        names = sorted(p.name for p in path.iterdir())
+        if not overwrite:
+            raise ConfigError(
+                option,
+                str(path),
+                f"a new or empty folder (it holds {', '.join(names[:4])}"
+                f"{', ...' if len(names) > 4 else ''}); pass --overwrite to replace "
+                "the results in it",
+            )
+        ours = [n for n in names if n in artifacts or (n.startswith(".") and n.endswith(".part"))]
+        foreign = [n for n in names if n not in ours]
+        if foreign:
+            raise ConfigError(
+                option,
+                str(path),
+                f"a folder holding only earlier results to overwrite (it also holds "
+                f"{', '.join(foreign[:4])})",
+            )
+        for name in ours:  # earlier results and leftover temporary files of atomic writes
+            target = path / name
+            if target.is_dir():
+                shutil.rmtree(target)
+            else:
+                target.unlink()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = tempfile.NamedTemporaryFile(dir=path, prefix=".write-test-", delete=True)
+        probe.close()
+    except OSError as exc:
+        raise ConfigError(option, str(path), f"a writable folder ({exc.strerror})") from None
+    return path
