@@ -34,6 +34,8 @@ SUMMARY_KEYS = {
     "self_collision_first_t_s",
     "self_collision_max_depth_m",
     "self_collision_pairs",
+    "final_tilt_rad",
+    "final_com_height_m",
 }
 
 
@@ -218,3 +220,30 @@ def test_duration_under_a_few_ticks_is_refused(tmp_path: Path, capsys) -> None:
     assert main(["run", "--duration", "0.0004", "--out", str(tmp_path / "r")]) == 2
     assert "--duration: got 0.0004" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_ctrl_c_and_sigterm_save_the_run_and_exit_130(tmp_path: Path, sig: str) -> None:
+    """Stopped mid-run by Ctrl-C (SIGINT) or SIGTERM, ``run`` writes what was simulated
+    (``interrupted: true``), says INTERRUPTED and exits 130."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "gaitnet_mpc.cli", "run", "--controller", "stand"]
+    cmd += ["--duration", "120", "--no-video", "--no-plots", "--no-progress", "--out", str(out)]
+    env = {**os.environ, "MUJOCO_GL": "egl"}
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
+    deadline = time.monotonic() + 60
+    while not out.exists() and time.monotonic() < deadline:  # created just before simulating
+        time.sleep(0.05)
+    time.sleep(1.0)
+    proc.send_signal(getattr(signal, sig))
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "INTERRUPTED at t = " in stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True and 0 < summary["duration_s"] < 120

@@ -11,6 +11,7 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -227,6 +228,7 @@ def _run(args: argparse.Namespace) -> int:
     }
     video = None if args.no_video else VideoConfig()
     viewer = _open_viewer(sim, robot.spec.trunk_body) if args.viewer else None
+    previous_sigterm = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
     try:
         summary = run_episode(
             sim,
@@ -240,6 +242,7 @@ def _run(args: argparse.Namespace) -> int:
             viewer=viewer,
         )
     finally:
+        signal.signal(signal.SIGTERM, previous_sigterm)
         if viewer is not None:
             viewer.close()
     plots_s = None
@@ -268,7 +271,29 @@ def _run(args: argparse.Namespace) -> int:
         timing += f", plots {plots_s:.1f} s"
     print(f"wall time: {timing}")
     print(f"results in {out}/")
-    return 0
+    print(_outcome_line(summary))
+    return 130 if summary["interrupted"] else 0
+
+
+def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
+    """SIGTERM handler during a run: stop it like Ctrl-C (what was simulated is saved)."""
+    raise KeyboardInterrupt
+
+
+def _outcome_line(summary: dict[str, Any]) -> str:
+    """One line that says how the run ended: OK, FELL or INTERRUPTED, with key numbers."""
+    t = summary["duration_s"]
+    numbers = (
+        f"{summary['distance_m']:.2f} m in {t:.2f} s, "
+        f"{summary['foothold_violations']} foothold violations, "
+        f"{summary['self_collisions']} ticks of leg contact, "
+        f"final tilt {summary['final_tilt_rad']:.2f} rad"
+    )
+    if summary["interrupted"]:
+        return f"INTERRUPTED at t = {t:.3f} s: {numbers}"
+    if summary["fell"]:
+        return f"FELL at t = {summary['fall_time_s']:.3f} s ({summary['fall_reason']}): {numbers}"
+    return f"OK: {numbers}"
 
 
 def _plot(args: argparse.Namespace) -> int:

@@ -433,6 +433,9 @@ def _summarise(
         "diverged": sim.diverged,
         "distance_m": distance,
         "lateral_drift_m": float(final.com_world_m[1] - com0[1]),
+        # how the episode ended: a run cut short by its duration can still end tilted
+        "final_tilt_rad": float(np.arccos(np.clip(final.base_rot_world[2, 2], -1.0, 1.0))),
+        "final_com_height_m": float(final.com_world_m[2] - sim.ground_height0_m),
         "mean_speed_mps": distance / sim_s if sim_s > 0 else 0.0,
         "speed_rmse_mps": rmse,
         "footholds": footholds,

@@ -256,6 +256,11 @@ class Simulator:
         return float(self.data.time)
 
     @property
+    def ground_height0_m(self) -> float:
+        """Ground height under the start position [m] (fall heights are measured from it)."""
+        return self._ground0_m
+
+    @property
     def diverged(self) -> bool:
         """Whether the simulation diverged (which also ended the episode as a fall)."""
         return self.fall.diverged
