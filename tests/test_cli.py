@@ -247,3 +247,20 @@ def test_ctrl_c_and_sigterm_save_the_run_and_exit_130(tmp_path: Path, sig: str) 
     assert "INTERRUPTED at t = " in stdout
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True and 0 < summary["duration_s"] < 120
+
+
+def test_options_without_effect_are_warned_and_recorded(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    assert _stand_run(out, "--vx", "0.5", "--dt", "0.05", "--push", "t=5,fx=10,dur=0.1") == 0
+    err = capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert len(summary["warnings"]) == 3
+    for text in summary["warnings"]:
+        assert f"warning: {text}" in err
+    assert any("--vx 0.5 has no effect" in w for w in summary["warnings"])
+    assert any("the run ends at 0.05 s" in w for w in summary["warnings"])
+
+
+def test_a_push_key_given_twice_is_refused(capsys) -> None:
+    assert main(["run", "--push", "t=1,fx=10,fx=20,dur=0.1"]) == 2
+    assert "'fx' is given twice" in capsys.readouterr().err

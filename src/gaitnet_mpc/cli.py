@@ -213,7 +213,11 @@ def _run(args: argparse.Namespace) -> int:
         artifacts=RUN_ARTIFACTS,
         overwrite=args.overwrite,
     )
+    warnings = _ineffective_options(args, robot.spec.planar, pushes)
+    for text in warnings:
+        print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     meta = {
+        "warnings": warnings,
         "robot": robot.name,
         "controller": args.controller,
         "controller_options": options,
@@ -273,6 +277,27 @@ def _run(args: argparse.Namespace) -> int:
     print(f"results in {out}/")
     print(_outcome_line(summary))
     return 130 if summary["interrupted"] else 0
+
+
+def _ineffective_options(args: argparse.Namespace, planar: bool, pushes: tuple) -> list[str]:
+    """Options given that will have no effect on this run (printed and recorded)."""
+    out = []
+    if args.controller == "stand":
+        for flag, value in (("--vx", args.vx), ("--vy", args.vy), ("--yaw-rate", args.yaw_rate)):
+            if value != 0.0:
+                out.append(f"{flag} {value:g} has no effect: the stand controller does not walk")
+        if args.dt is not None:
+            out.append(f"--dt {args.dt:g} has no effect: the stand controller has no MPC")
+    if planar:
+        for flag, value in (("--vy", args.vy), ("--yaw-rate", args.yaw_rate)):
+            if value != 0.0:
+                out.append(f"{flag} {value:g} has no effect on the planar robot")
+    for push in pushes:
+        if push.t_s >= args.duration:
+            out.append(
+                f"--push at t = {push.t_s:g} s has no effect: the run ends at {args.duration:g} s"
+            )
+    return out
 
 
 def _raise_keyboard_interrupt(signum: int, frame: object) -> None:

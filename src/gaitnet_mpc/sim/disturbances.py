@@ -70,6 +70,8 @@ class Push:
                 raise ConfigError(
                     "--push", text, f"comma-separated key=value with keys {sorted(allowed)}"
                 )
+            if key in values:
+                raise ConfigError("--push", text, f"each key once ('{key}' is given twice)")
             try:
                 values[key] = float(raw)
             except ValueError:
