@@ -264,3 +264,10 @@ def test_options_without_effect_are_warned_and_recorded(tmp_path: Path, capsys) 
 def test_a_push_key_given_twice_is_refused(capsys) -> None:
     assert main(["run", "--push", "t=1,fx=10,fx=20,dur=0.1"]) == 2
     assert "'fx' is given twice" in capsys.readouterr().err
+
+
+def test_a_course_file_that_is_not_utf8_is_a_named_error(tmp_path: Path, capsys) -> None:
+    course = tmp_path / "bad.json"
+    course.write_bytes(b'{"name": "\xff\xfe"}')
+    assert main(["run", "--course", str(course), "--out", str(tmp_path / "r")]) == 2
+    assert "UTF-8" in capsys.readouterr().err

@@ -443,6 +443,10 @@ class Course:
             raise CourseFormatError(
                 "course", str(path), f"a readable JSON course file ({exc.strerror or exc})"
             ) from exc
+        except UnicodeDecodeError as exc:
+            raise CourseFormatError(
+                "course", str(path), f"a UTF-8 text JSON course file (byte {exc.start} is not)"
+            ) from None
         try:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
