@@ -83,6 +83,11 @@ def walking_low_level_config() -> LowLevelConfig:
     )
 
 
+#: Time constant of the lateral return to the commanded path [s] (KDWalkConfig and
+#: ``--preview``; chosen on the built-in stepping stones, docs/design/lateral_return.md).
+LATERAL_RETURN_TIME_S = 0.7
+
+
 @dataclass(frozen=True)
 class KDWalkConfig:
     """Settings of the kino-dynamic walking controller."""
@@ -122,7 +127,7 @@ class KDWalkConfig:
     # nothing pulls the robot back to its path). With the feet kept apart the robot
     # drifts sideways without it (gap, dt 0.045: 0.62 m, then a fall); the 0.7 s value was
     # chosen on the built-in stepping stones (docs/design/lateral_return.md).
-    lateral_return_time_s: float | None = 0.7
+    lateral_return_time_s: float | None = LATERAL_RETURN_TIME_S
     # Multi-step footstep preview (gait/preview.py): a LIP plan of the next steps chooses
     # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
     # reference of eq. 18. None: one-step preview (patch by reach).
@@ -149,7 +154,7 @@ def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
     lane (``benchmarks/results/kd_stones_rate.md``).
     """
     base = base or KDWalkConfig()
-    tau = base.lateral_return_time_s or 0.7
+    tau = base.lateral_return_time_s or LATERAL_RETURN_TIME_S
     return replace(base, preview=PreviewConfig(), lateral_return_time_s=tau)
 
 

@@ -24,7 +24,7 @@ from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.sim.io import write_atomic, write_json_atomic
-from gaitnet_mpc.sim.simulator import Simulator
+from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
 
 
 @dataclass(frozen=True)
@@ -434,8 +434,8 @@ def _summarise(
         "distance_m": distance,
         "lateral_drift_m": float(final.com_world_m[1] - com0[1]),
         # how the episode ended: a run cut short by its duration can still end tilted
-        "final_tilt_rad": float(np.arccos(np.clip(final.base_rot_world[2, 2], -1.0, 1.0))),
-        "final_com_height_m": float(final.com_world_m[2] - sim.ground_height0_m),
+        "final_tilt_rad": tilt_rad(final.base_rot_world),
+        "final_com_height_m": sim.com_height_m,
         "mean_speed_mps": distance / sim_s if sim_s > 0 else 0.0,
         "speed_rmse_mps": rmse,
         "footholds": footholds,

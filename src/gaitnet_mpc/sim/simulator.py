@@ -52,6 +52,12 @@ _DIVERGENCE_WARNINGS = (
 )
 
 
+def tilt_rad(rot: np.ndarray) -> float:
+    """Angle between a body's z axis (third column of its rotation ``rot`` (3, 3)) and the
+    world's vertical [rad]."""
+    return float(np.arccos(np.clip(rot[2, 2], -1.0, 1.0)))
+
+
 def check_payload(
     payload_kg: float, robot_mass_kg: float | None = None, field: str = "payload_kg"
 ) -> None:
@@ -210,7 +216,6 @@ class Simulator:
         #: geom id -> whether it belongs to the robot (its body is not the world body)
         self._robot_geom = m.geom_bodyid != 0
         self._body_names = [m.body(b).name for b in range(m.nbody)]
-        self._self_body_ids: set[tuple[int, int]] = set()
         self._act_limit = m.actuator_ctrlrange[:, 1].copy()
         r = self.robot
         self._lin_dofs = slice(0, 2) if r.spec.planar else slice(0, 3)
@@ -244,7 +249,6 @@ class Simulator:
         self.footholds.clear()
         self.fall = FallStatus()
         self.self_collisions = SelfCollisionStats()
-        self._self_body_ids.clear()
         self.self_contact = self._self_contacts() is not None
         self._save_good_state()
         self._in_contact = dict.fromkeys(FEET, True)
@@ -256,9 +260,9 @@ class Simulator:
         return float(self.data.time)
 
     @property
-    def ground_height0_m(self) -> float:
-        """Ground height under the start position [m] (fall heights are measured from it)."""
-        return self._ground0_m
+    def com_height_m(self) -> float:
+        """CoM height above the ground under the start position [m] (the fall check's)."""
+        return float(self.data.subtree_com[self._trunk_id, 2] - self._ground0_m)
 
     @property
     def diverged(self) -> bool:
@@ -400,11 +404,8 @@ class Simulator:
         stats.max_depth_m = max(stats.max_depth_m, depth)
         bodies = self.model.geom_bodyid[con.geom[idx]]
         for b1, b2 in bodies:
-            key = (int(min(b1, b2)), int(max(b1, b2)))
-            if key not in self._self_body_ids:
-                self._self_body_ids.add(key)
-                n1, n2 = sorted((self._body_names[key[0]], self._body_names[key[1]]))
-                stats.body_pairs.add((n1, n2))
+            n1, n2 = sorted((self._body_names[b1], self._body_names[b2]))
+            stats.body_pairs.add((n1, n2))
 
     def _update_contacts_and_falls(self) -> None:
         d = self.data
@@ -421,9 +422,8 @@ class Simulator:
             self._in_contact[foot] = now
         if self.fall.fell:
             return
-        com_z = d.subtree_com[self._trunk_id, 2] - self._ground0_m
-        z_axis = d.xmat[self._trunk_id].reshape(3, 3)[:, 2]
-        tilt = float(np.arccos(np.clip(z_axis[2], -1.0, 1.0)))
+        com_z = self.com_height_m
+        tilt = tilt_rad(d.xmat[self._trunk_id].reshape(3, 3))
         if other:
             self.fall = FallStatus(True, t, "a body other than a foot touched the terrain")
         elif com_z < self.config.fall_com_height_ratio * self._com_height0_m:
