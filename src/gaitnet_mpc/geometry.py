@@ -1,0 +1,39 @@
+"""Small geometry shared by every layer: gravity, cross-product matrix, planar rotations,
+angle wrapping.
+
+Conventions: right-handed world frame, z up; yaw ``psi`` is the rotation about z, positive
+counter-clockwise seen from above; angles in rad, lengths in m.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+GRAVITY_MPS2 = 9.81  # magnitude of the gravity acceleration [m/s^2], along -z
+
+
+def skew(v: ArrayLike) -> np.ndarray:
+    """(3, 3) cross-product matrix: ``skew(a) @ b == np.cross(a, b)``."""
+    v = np.asarray(v, dtype=float)
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def rot2(yaw_rad: float) -> np.ndarray:
+    """(2, 2) rotation of the horizontal plane by ``yaw_rad``."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array([[c, -s], [s, c]])
+
+
+def heading_axes(yaw_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal unit vectors ``(e_x, e_y)`` of the heading ``yaw_rad``: forward and left."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array([c, s]), np.array([-s, c])
+
+
+def wrap_angle(angle_rad: ArrayLike) -> np.ndarray:
+    """Angle(s) wrapped to ``(-pi, pi]`` (``atan2(sin a, cos a)``, elementwise)."""
+    a = np.asarray(angle_rad, dtype=float)
+    return np.arctan2(np.sin(a), np.cos(a))
