@@ -33,10 +33,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.robots import load_robot
-from gaitnet_mpc.sim.episode import Command
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 from machine import machine_info

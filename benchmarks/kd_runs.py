@@ -43,6 +43,7 @@ PRESETS = ("default", "paper")
 
 
 def run(job: tuple[str, Scenario]) -> dict:
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.kd_walk import (
         KD_PRESETS,
         KDWalkController,
@@ -51,7 +52,7 @@ def run(job: tuple[str, Scenario]) -> dict:
     )
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 

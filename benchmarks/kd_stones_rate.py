@@ -45,6 +45,7 @@ def run(job: Job) -> dict:
     initial base x is shifted by ``i * STEP_M``."""
     import mujoco
 
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.kd_walk import (
         KDWalkConfig,
         KDWalkController,
@@ -53,7 +54,7 @@ def run(job: Job) -> dict:
     )
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 

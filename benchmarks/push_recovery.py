@@ -79,10 +79,11 @@ def phase_value(name: str) -> float:
 
 def episode(controller_name: str, direction: str, phase: str | None, force_n: float) -> dict:
     """One pushed episode; returns its row of the raw-outcome CSV."""
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
     from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.disturbances import Push
-    from gaitnet_mpc.sim.episode import Command, run_episode
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator
     from gaitnet_mpc.terrain import load_course
 

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.srbm_walk import SRBMWalkController
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.mpc.qp import (
@@ -55,7 +56,6 @@ from gaitnet_mpc.mpc.qp import (
 )
 from gaitnet_mpc.mpc.srbm import SRBMConfig
 from gaitnet_mpc.robots import load_robot
-from gaitnet_mpc.sim.episode import Command
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 from machine import machine_info

@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.stand import StandController
 from gaitnet_mpc.robots import load_robot
-from gaitnet_mpc.sim.episode import Command, run_episode
+from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator
 from gaitnet_mpc.terrain import load_course
 

@@ -14,7 +14,7 @@ from gaitnet_mpc.cli import main
 from gaitnet_mpc.control.base import MPCStats
 from gaitnet_mpc.results import load_run
 from gaitnet_mpc.results.plots import make_plots
-from gaitnet_mpc.sim.episode import EpisodeLog, MPCLog, _MPCProbe
+from gaitnet_mpc.runner.episode import EpisodeLog, MPCLog, _MPCProbe
 from gaitnet_mpc.terrain import load_course
 
 BASE_PLOTS = ("velocity.png", "course_top.png", "steps.png", "contact_torque.png")
@@ -225,7 +225,7 @@ def test_kd_run_folder_gets_the_momentum_plot(tmp_path: Path) -> None:
 def test_planned_footholds_are_drawn_as_discs_on_the_ground() -> None:
     import mujoco
 
-    from gaitnet_mpc.sim.episode import _draw_footholds
+    from gaitnet_mpc.runner.episode import _draw_footholds
 
     model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
     scene = mujoco.MjvScene(model, maxgeom=3)

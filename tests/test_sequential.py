@@ -7,11 +7,12 @@ import itertools
 import numpy as np
 import pytest
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.robots import FEET, load_robot
-from gaitnet_mpc.sim.episode import Command, run_episode
+from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 

@@ -80,8 +80,9 @@ def test_solution_respects_contact_schedule_and_friction(mpc: SRBMMPC) -> None:
 @pytest.mark.slow
 def test_humanoid_walks_forward_with_srbm_mpc() -> None:
     """Closed loop, 3 s at 0.25 m/s on flat ground: progress, no fall, allowed footholds."""
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.srbm_walk import SRBMWalkController
-    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
@@ -152,8 +153,9 @@ def test_lip_foothold_gains_are_deadbeat_with_the_sway_orbit() -> None:
 
 
 def _walk(robot_name: str, vx: float, duration_s: float, pushes: tuple = ()) -> dict:
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.srbm_walk import SRBMWalkController
-    from gaitnet_mpc.sim.episode import Command, run_episode
+    from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator
     from gaitnet_mpc.terrain import load_course
 

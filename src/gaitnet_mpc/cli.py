@@ -167,11 +167,12 @@ def _open_viewer(sim: Simulator, trunk_body: str) -> Any:
 def _run(args: argparse.Namespace) -> int:
     import time
 
+    from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
     from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
     from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.runner.episode import VideoConfig, run_episode
     from gaitnet_mpc.sim.disturbances import Push
-    from gaitnet_mpc.sim.episode import Command, VideoConfig, run_episode
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
     from gaitnet_mpc.terrain import SEEDED_COURSES, load_course
 

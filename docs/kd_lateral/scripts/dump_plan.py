@@ -5,7 +5,7 @@ from gaitnet_mpc.control.kd_walk import KDWalkController
 from overrides import kd_config
 from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import load_robot, FEET
-from gaitnet_mpc.sim.episode import Command, run_episode
+from gaitnet_mpc.runner.episode import Command, run_episode
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
 dt, T = float(sys.argv[1]), float(sys.argv[2])

@@ -26,7 +26,7 @@ def kd_setup(course_name, dt, overrides, robot_name="humanoid3d", vx=0.75):
     from gaitnet_mpc.control.kd_walk import KDWalkController
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.sim.episode import Command
+    from gaitnet_mpc.runner.episode import Command
     from gaitnet_mpc.terrain import load_course
 
     robot, course, cmd = load_robot(robot_name), load_course(course_name), Command(vx_mps=vx)

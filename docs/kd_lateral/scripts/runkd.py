@@ -3,7 +3,7 @@ Prints the outcome, the step width and the MPC statistics of one kd run."""
 import json, sys
 import numpy as np
 from overrides import kd_setup
-from gaitnet_mpc.sim.episode import run_episode
+from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import Simulator
 course_name, dt, dur = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 ov = json.loads(sys.argv[4]) if len(sys.argv) > 4 else {}

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 
 
 @dataclass

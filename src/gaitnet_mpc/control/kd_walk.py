@@ -16,8 +16,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from gaitnet_mpc.command import CommandProfile
 from gaitnet_mpc.control.base import Controller, MPCStats
-from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.contact import ContactParams
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
@@ -43,7 +43,7 @@ from gaitnet_mpc.mpc.sequential import (
 )
 from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 from gaitnet_mpc.terrain import Course
 
 

@@ -29,7 +29,7 @@ import pinocchio as pin
 
 from gaitnet_mpc.kinematics.leg_ik import leg_geometries, whole_body_ik
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 
 
 @dataclass(frozen=True)

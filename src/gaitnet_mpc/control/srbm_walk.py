@@ -21,7 +21,7 @@ from gaitnet_mpc.control.walking import WalkingConfig, WalkingController
 from gaitnet_mpc.errors import QPSolveError
 from gaitnet_mpc.mpc.srbm import NX, SRBMMPC, SRBMConfig
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from gaitnet_mpc.control.stance import StanceMap
 from gaitnet_mpc.mpc.qp import QPProblem, make_workspace
 from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, skew
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 
 
 @dataclass(frozen=True)

@@ -51,8 +51,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from gaitnet_mpc.command import CommandProfile
 from gaitnet_mpc.control.base import Controller, MPCStats
-from gaitnet_mpc.control.command import CommandProfile
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.gait import (
@@ -67,7 +67,7 @@ from gaitnet_mpc.gait import (
 )
 from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 
 #: A late foot is lowered towards this depth below the ground [m] until it touches down.
 LATE_DEPTH_M = 0.03

@@ -333,7 +333,7 @@ def _derivative_matrix(times_s: np.ndarray) -> np.ndarray:
 
 
 class CommandLike(Protocol):
-    """Anything with the fields of :class:`gaitnet_mpc.sim.episode.Command`."""
+    """Anything with the fields of :class:`gaitnet_mpc.runner.episode.Command`."""
 
     vx_mps: float
     vy_mps: float
@@ -907,7 +907,7 @@ def make_reference(
             ``ReferenceTiming.from_horizon(timing)`` (``h' = 5``, boundary 0 = now).
         command: ``(vx [m/s], vy [m/s], yaw_rate [rad/s])`` with ``(vx, vy)`` in the heading
             (yaw) frame, or an object with ``vx_mps, vy_mps, yaw_rate_radps``
-            (:class:`gaitnet_mpc.sim.episode.Command`). The biped uses ``vx`` only.
+            (:class:`gaitnet_mpc.runner.episode.Command`). The biped uses ``vx`` only.
         footholds: foot -> touchdown targets (n, 3) or (3,) [m] of that foot's upcoming
             swings in the horizon, in order: for the foot swinging now its current target,
             for the standing foot its next foothold, and so on. A missing target is

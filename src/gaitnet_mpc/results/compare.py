@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.results.plots import moving_average, new_figure
 from gaitnet_mpc.results.rundir import RunFolder, load_run, save_figure_atomic
-from gaitnet_mpc.sim.io import write_atomic
 
 #: Columns of the comparison table (``compare.csv`` / ``compare.md``).
 TABLE_COLUMNS: tuple[str, ...] = (

@@ -1,6 +1,6 @@
 """Reading a run folder and writing result files atomically.
 
-A run folder (written by ``gaitnet-mpc run``, see :mod:`gaitnet_mpc.sim.episode`) holds
+A run folder (written by ``gaitnet-mpc run``, see :mod:`gaitnet_mpc.runner.episode`) holds
 ``summary.json``, ``log.csv`` (one row per control tick), ``mpc_log.csv`` (one row per MPC
 solve, MPC controllers only), ``course.json``, ``video.mp4`` and ``plots/``. Everything
 here reads only those files, so plots and comparisons can be re-made at any time.

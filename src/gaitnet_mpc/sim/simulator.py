@@ -16,7 +16,7 @@ import numpy as np
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.sim.disturbances import Push
-from gaitnet_mpc.sim.state import RobotState
+from gaitnet_mpc.state import RobotState
 from gaitnet_mpc.terrain import Course, course_geoms_xml
 
 _SCENE_XML = """

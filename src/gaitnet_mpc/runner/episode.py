@@ -20,32 +20,12 @@ from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.results.io import write_atomic, write_json_atomic
 from gaitnet_mpc.robots import FEET
-from gaitnet_mpc.sim.io import write_atomic, write_json_atomic
 from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
-
-
-@dataclass(frozen=True)
-class Command:
-    """User velocity command in the world frame."""
-
-    vx_mps: float = 0.0
-    vy_mps: float = 0.0
-    yaw_rate_radps: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name, value, bound in (
-            ("--vx", self.vx_mps, 1.5),
-            ("--vy", self.vy_mps, 0.5),
-            ("--yaw-rate", self.yaw_rate_radps, 1.5),
-        ):
-            if not (np.isfinite(value) and abs(value) <= bound):
-                raise ConfigError(name, value, f"a finite value in [-{bound}, {bound}]")
-
-    def to_dict(self) -> dict[str, float]:
-        return {"vx_mps": self.vx_mps, "vy_mps": self.vy_mps, "yaw_rate_radps": self.yaw_rate_radps}
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The velocity command as walking controllers follow it over time.
+"""The user's velocity command, and how walking controllers follow it over time.
 
 The command ``(vx, vy)`` (heading frame) is ramped up from rest at a bounded acceleration,
 ``k(t) = min(1, a t / max(|vx|, |vy|))`` of it applied ``t`` after the start, and the
@@ -7,8 +7,31 @@ commanded heading is the initial yaw plus the integrated yaw rate.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Any
+
+from gaitnet_mpc.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Command:
+    """User velocity command in the world frame."""
+
+    vx_mps: float = 0.0
+    vy_mps: float = 0.0
+    yaw_rate_radps: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, value, bound in (
+            ("--vx", self.vx_mps, 1.5),
+            ("--vy", self.vy_mps, 0.5),
+            ("--yaw-rate", self.yaw_rate_radps, 1.5),
+        ):
+            if not (math.isfinite(value) and abs(value) <= bound):
+                raise ConfigError(name, value, f"a finite value in [-{bound}, {bound}]")
+
+    def to_dict(self) -> dict[str, float]:
+        return {"vx_mps": self.vx_mps, "vy_mps": self.vy_mps, "yaw_rate_radps": self.yaw_rate_radps}
 
 
 @dataclass(frozen=True)
@@ -16,13 +39,13 @@ class CommandProfile:
     """Ramped velocity command and commanded heading of one episode.
 
     Attributes:
-        command: object with ``vx_mps``, ``vy_mps``, ``yaw_rate_radps``.
+        command: the velocity command.
         t0_s: start time of the episode [s].
         yaw0_rad: measured heading at the start [rad].
         max_accel_mps2: the command is ramped up from rest at this rate [m/s^2].
     """
 
-    command: Any
+    command: Command
     t0_s: float
     yaw0_rad: float
     max_accel_mps2: float
