@@ -99,6 +99,20 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         (["--push", "t=0.1,fx=1e9,dur=0.1"], "--push fx: got 1000000000.0, expected a force"),
         (["--push", "t=0.1,fx=500,dur=0.5"], "push.impulse: got '250 N s"),
         (["--controller", "srbm", "--preview"], "--preview: got 'srbm', expected the kd"),
+        (
+            ["--controller", "kd", "--set", "sequential.kd.w_forse=1"],
+            "--set sequential.kd.w_forse: got 1, expected a field of KDConfig; close matches: "
+            "sequential.kd.w_force",
+        ),
+        (
+            ["--controller", "kd", "--set", "sequential.kd.horizon=0.5"],
+            "--set sequential.kd.horizon: got 0.5, expected an integer",
+        ),
+        (["--controller", "srbm", "--set", "mpc.horizon=0"], "--set mpc.horizon: got 0"),
+        (["--controller", "kd", "--set", "oops"], "--set: got 'oops', expected KEY=VALUE"),
+        (["--controller", "srbm", "--preset", "paper"], "--preset: got 'paper', expected one of"),
+        (["--controller", "stand", "--set", "dt_s=1"], "the stand controller has no settings"),
+        (["--controller", "kd", "--config", "/nonexistent/x.toml"], "--config: got '/nonex"),
     ],
 )
 def test_bad_input_fails_fast_with_the_field(
@@ -166,6 +180,48 @@ def test_kd_preview_run_records_its_options(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["controller_options"] == {"dt_s": 0.055, "preview": True}
     assert not summary["fell"]
+
+
+def test_set_is_written_to_config_toml_and_config_repeats_the_run(tmp_path: Path) -> None:
+    """``--set`` changes the run's ``config.toml``; ``--config`` of that file repeats the
+    run (same settings, same log but for the wall-clock solve times)."""
+    import tomllib
+
+    quiet = ["--no-video", "--no-plots", "--no-progress"]
+    argv = ["run", "--controller", "srbm", "--vx", "0.3", "--duration", "0.3", *quiet]
+    first, second = tmp_path / "a", tmp_path / "b"
+    sets = ["--set", "mpc.w_force=2e-6", "--set", "max_step_m=0.3", "--dt", "0.05"]
+    assert main([*argv, *sets, "--out", str(first)]) == 0
+    config = tomllib.loads((first / "config.toml").read_text())
+    assert config["mpc"]["w_force"] == 2e-6 and config["max_step_m"] == 0.3
+    assert config["dt_s"] == 0.05 and config["com_height_m"] == "none"
+    summary = json.loads((first / "summary.json").read_text())
+    assert summary["controller_options"]["set"] == ["mpc.w_force=2e-6", "max_step_m=0.3"]
+    assert main([*argv, "--config", str(first / "config.toml"), "--out", str(second)]) == 0
+    assert (second / "config.toml").read_text() == (first / "config.toml").read_text()
+
+    def without_solve_ms(run: Path) -> list[list[str]]:
+        rows = [line.split(",") for line in (run / "log.csv").read_text().splitlines()]
+        col = rows[0].index("mpc_solve_ms")
+        return [row[:col] + row[col + 1 :] for row in rows]
+
+    assert without_solve_ms(second) == without_solve_ms(first)
+
+
+def test_kd_config_toml_holds_preset_and_overrides(tmp_path: Path) -> None:
+    """kd on the planar robot: ``--preset paper`` (Table V) and ``--set`` in config.toml."""
+    import tomllib
+
+    out = tmp_path / "kd"
+    argv = ["run", "--robot", "biped2d", "--controller", "kd", "--preset", "paper"]
+    argv += ["--set", "replan_j_max=7", "--set", "sequential.kd.w_force=2e-4"]
+    argv += ["--duration", "0.05", "--no-video", "--no-plots", "--no-progress"]
+    assert main([*argv, "--out", str(out)]) == 0
+    config = tomllib.loads((out / "config.toml").read_text())
+    assert config["replan_j_max"] == 7 and config["keep_feet_apart"] is False
+    kd = config["sequential"]["kd"]
+    assert kd["w_force"] == 2e-4 and kd["w_pose"] == [200.0, 200.0, 200.0, 300.0, 300.0, 300.0]
+    assert kd["qp_options"] == {} and config["preview"] == "none"
 
 
 def _stand_run(out: Path, *extra: str) -> int:

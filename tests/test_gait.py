@@ -20,6 +20,7 @@ from gaitnet_mpc.gait import (
     SwingTrajectory,
     obstacle_array,
 )
+from gaitnet_mpc.gait.swing import swing_profile
 from gaitnet_mpc.robots.spec import FEET
 
 TICK_S = 0.001  # 1 kHz control loop
@@ -296,6 +297,18 @@ def test_swing_retarget_past_apex_over_new_obstacle() -> None:
     pos = tr.position(t)
     over = (pos[:, 0] + 0.03 >= 0.33) & (pos[:, 0] - 0.03 <= 0.37)
     assert over.any() and np.all(pos[over, 2] >= 0.06 + 0.02 - 1e-9)
+
+
+def test_swing_profile_matches_swing_trajectory() -> None:
+    """The vectorised closed form is the obstacle-free SwingTrajectory to rounding."""
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        p0, p1 = rng.uniform(-0.3, 0.3, 3), rng.uniform(-0.3, 0.3, 3)
+        duration = rng.uniform(0.1, 0.5)
+        t = np.linspace(0.0, duration, 23)
+        traj = SwingTrajectory(p0, p1, duration, 0.05)
+        got = swing_profile(np.tile(p0, (23, 1)), np.tile(p1, (23, 1)), t / duration, 0.05)
+        np.testing.assert_allclose(got, traj.position(t), atol=1e-12)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -2,24 +2,22 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 import pytest
 
-from gaitnet_mpc.control.contact import foot_wrench_constraints
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.mpc.centroidal_model import NX, nonlinear_rollout, nonlinear_step
+from gaitnet_mpc.mpc.contact import foot_wrench_constraints
+from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask, tie_groups
 from gaitnet_mpc.mpc.implicit_kd import (
-    NX,
     KDConfig,
     KDIterate,
     KDStep,
     KDSubproblem,
     KDTolerances,
-    next_touchdown_mask,
-    nonlinear_rollout,
-    nonlinear_step,
-    tie_groups,
 )
 
 H = 10
@@ -106,6 +104,38 @@ def _random_consistent_iterate(
     return x0, dts, KDIterate(f=f, tau=tau, p_foot=p_foot, p_com=pc)
 
 
+def pack(
+    states: np.ndarray,
+    delta_f: np.ndarray,
+    delta_tau: np.ndarray,
+    delta_p_foot: np.ndarray,
+    delta_p_com: np.ndarray,
+) -> np.ndarray:
+    """The QP vector (n,) of states and search directions (layout of the module docstring
+    of :mod:`gaitnet_mpc.mpc.implicit_kd`; inverse of :meth:`KDLayout.unpack`)."""
+    body = np.concatenate(
+        [
+            states[:H],
+            delta_p_com[:H],
+            delta_f.reshape(H, -1),
+            delta_tau.reshape(H, -1),
+            delta_p_foot.reshape(H, -1),
+        ],
+        axis=1,
+    )
+    return np.concatenate([body.ravel(), states[H], delta_p_com[H]])
+
+
+def test_pack_inverts_unpack(sub: KDSubproblem) -> None:
+    z = np.random.default_rng(0).normal(size=sub.n)
+    parts = sub.layout.unpack(z)
+    packed = pack(
+        parts["states"], parts["delta_f"], parts["delta_tau"], parts["delta_p_foot"],
+        parts["delta_p_com"],
+    )  # fmt: skip
+    np.testing.assert_array_equal(packed, z)
+
+
 def test_linearised_dynamics_match_eq10_to_first_order(sub: KDSubproblem) -> None:
     """Equality rows evaluated on the exact eq. 10 rollout leave only (dpf - dpc) x df dt."""
     rng = np.random.default_rng(1)
@@ -123,7 +153,7 @@ def test_linearised_dynamics_match_eq10_to_first_order(sub: KDSubproblem) -> Non
             it.p_com[0], dts, MASS, G,
         )  # fmt: skip
         d_pc = pc - it.p_com
-        z = sub.pack(xs, eps * d_f, eps * d_tau, eps * d_pf, d_pc)
+        z = pack(xs, eps * d_f, eps * d_tau, eps * d_pf, d_pc)
         resid = problem.A_eq @ z - problem.b_eq
         # Exactly the dropped bilinear term of eq. 15 (Assumption 2), row block by stage.
         expected = np.zeros_like(resid)
@@ -238,7 +268,9 @@ def test_push_moves_next_foothold_and_stays_feasible(toe_m: float) -> None:
     it, _, _ = converge(sub, args, pc0)
     nominal = it.p_foot[9, 1].copy()
     args["x0"] = args["x0"] + np.r_[np.zeros(6), 8.0, 5.0, 0.0, np.zeros(3)]  # +0.5, +0.3 m/s
-    it = it.with_measured_com(pc0 + np.array([0.01, 0.01, 0.0]))
+    p_com = it.p_com.copy()
+    p_com[0] = pc0 + np.array([0.01, 0.01, 0.0])  # new CoM measurement
+    it = replace(it, p_com=p_com)
     for _ in range(30):
         step = sub.solve(iterate=it, **args)
         it = it.apply(step)

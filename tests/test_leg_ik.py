@@ -13,10 +13,8 @@ from gaitnet_mpc.kinematics.leg_ik import (
     LegGeometry,
     leg_geometry,
     leg_ik,
-    pin_configuration,
     planar_leg_geometry,
     planar_leg_ik,
-    trunk_yaw_rad,
     whole_body_ik,
 )
 from gaitnet_mpc.robots import FEET, RobotModel, load_robot
@@ -37,6 +35,21 @@ def biped() -> RobotModel:
 
 
 # ----------------------------------------------------------------------- helpers
+def _pin_q(
+    robot: RobotModel, p_base: np.ndarray, rot_base: np.ndarray, joints: np.ndarray
+) -> np.ndarray:
+    """Pinocchio configuration (nq,) of a trunk pose and the actuated joint angles."""
+    if robot.spec.planar:  # [x, z, pitch, joints]
+        root = [p_base[0], p_base[2], np.arctan2(rot_base[0, 2], rot_base[0, 0])]
+        return np.concatenate([root, joints])
+    return np.concatenate([p_base, pin.Quaternion(rot_base).coeffs(), joints])  # xyzw
+
+
+def _trunk_yaw(rot: np.ndarray) -> np.ndarray:
+    """(N,) heading of the trunk x axis of (N, 3, 3) rotations."""
+    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
+
+
 def _trunk_pose(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     rpy = np.array(
         [
@@ -76,7 +89,7 @@ def _feasible_sample(
         q_leg[0] = 0.0
     joints = robot.nominal_joint_pos()
     joints[idx] = q_leg
-    q = pin_configuration(robot, p_base, rot_base, joints)[0]
+    q = _pin_q(robot, p_base, rot_base, joints)
     pin.forwardKinematics(robot.pin_model, data, q)
     rot_ankle = data.oMi[robot.pin_model.getJointId(robot.joint_names[idx[4]])].rotation
     q_leg[4] = np.arctan2(rot_ankle[2, 0], rot_ankle[2, 2])  # world-level foot x axis
@@ -141,7 +154,7 @@ def test_wrong_geometry_kind_raises(humanoid: RobotModel, biped: RobotModel) -> 
 @pytest.mark.parametrize("foot", FEET)
 def test_round_trip_pinocchio_thousands(humanoid: RobotModel, foot: str) -> None:
     s = _samples(humanoid, foot, 1500, seed=1 if foot == "left" else 2)
-    yaw = trunk_yaw_rad(s["rot"]) + s["q_leg"][:, 0]
+    yaw = _trunk_yaw(s["rot"]) + s["q_leg"][:, 0]
     sol = leg_ik(leg_geometry(humanoid, foot), s["p_foot"], s["p"], s["rot"], yaw)
     assert sol.q_rad.shape == (1500, 5)
     assert sol.reachable.all()
@@ -168,7 +181,7 @@ def test_round_trip_mujoco(humanoid: RobotModel, foot: str) -> None:
         s["p_foot"],
         s["p"],
         s["rot"],
-        trunk_yaw_rad(s["rot"]) + s["q_leg"][:, 0],
+        _trunk_yaw(s["rot"]) + s["q_leg"][:, 0],
     )
     assert sol.reachable.all()
     m = humanoid.mj_model
@@ -225,7 +238,7 @@ def test_foot_yaw_sets_world_heading_for_level_trunk(humanoid: RobotModel) -> No
         assert sol.reachable[0]
         joints = humanoid.nominal_joint_pos()
         joints[humanoid.leg_joint_index["left"]] = sol.q_rad[0]
-        q = pin_configuration(humanoid, p_base, rot, joints)[0]
+        q = _pin_q(humanoid, p_base, rot, joints)
         p_foot, rot_foot = _foot_fk(humanoid, data, "left", q)
         assert np.linalg.norm(p_foot - target) < POS_TOL_M
         heading = np.arctan2(rot_foot[1, 0], rot_foot[0, 0])
@@ -320,7 +333,7 @@ def _check_any_targets(
     for k in np.flatnonzero(sol.reachable):
         joints = robot.nominal_joint_pos()
         joints[robot.leg_joint_index[foot]] = sol.q_rad[k]
-        q = pin_configuration(robot, p_base, rot, joints)[0]
+        q = _pin_q(robot, p_base, rot, joints)
         p_foot, rot_foot = _foot_fk(robot, data, foot, q)
         assert np.linalg.norm(p_foot - p_target[k]) < POS_TOL_M
         assert abs(rot_foot[2, 0]) < ROT_TOL
@@ -399,7 +412,7 @@ def test_whole_body_ik_recovers_standing_pose(name: str) -> None:
     np.testing.assert_allclose(
         sol.joint_pos_rad, np.tile(robot.nominal_joint_pos(), (3, 1)), atol=1e-9
     )
-    q = pin_configuration(robot, p_base, rot_base, sol.joint_pos_rad[0])[0]
+    q = _pin_q(robot, p_base, rot_base, sol.joint_pos_rad[0])
     q_expected, _ = robot.mj_to_pin(qpos, np.zeros(m.nv))
     np.testing.assert_allclose(q, q_expected, atol=1e-12)
 

@@ -17,19 +17,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from gaitnet_mpc.control.contact import foot_wrench_constraints
-from gaitnet_mpc.mpc.implicit_kd import (
-    N_FEET,
-    NX,
-    KDConfig,
-    KDIterate,
-    KDSubproblem,
-    next_touchdown_mask,
-    tie_groups,
-)
+from gaitnet_mpc.geometry import skew
+from gaitnet_mpc.mpc.centroidal_model import N_FEET, NX
+from gaitnet_mpc.mpc.contact import foot_wrench_constraints
+from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask, tie_groups
+from gaitnet_mpc.mpc.implicit_kd import KDConfig, KDIterate, KDSubproblem
 from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, make_workspace
 from gaitnet_mpc.mpc.qp.structure import EntrySelection, canonical_csc, triu_csc
-from gaitnet_mpc.mpc.srbm import skew
 
 H = 6
 MASS = 16.0
@@ -73,6 +67,36 @@ def random_case(seed: int) -> tuple[dict[str, Any], KDIterate]:
     return args, it
 
 
+#: Variables per stage block of the CMPC QP (``implicit_kd`` module docstring):
+#: ``x_k`` (12), ``dpc_k`` (3), then ``df``, ``dtau``, ``dpf`` (3 per foot each).
+NS = NX + 3 + 9 * N_FEET
+
+
+def ix(k: int) -> int:
+    """Column of ``x_k`` (12 entries), ``k = 0 .. h``."""
+    return NS * k
+
+
+def ipc(k: int) -> int:
+    """Column of ``delta p_c,k`` (3), ``k = 0 .. h``."""
+    return NS * k + NX
+
+
+def i_f(k: int, i: int) -> int:
+    """Column of ``delta f_i,k`` (3)."""
+    return NS * k + NX + 3 + 3 * i
+
+
+def i_tau(k: int, i: int) -> int:
+    """Column of ``delta tau_i,k`` (3)."""
+    return i_f(k, i) + 3 * N_FEET
+
+
+def i_pf(k: int, i: int) -> int:
+    """Column of ``delta p_f,i,k`` (3)."""
+    return i_f(k, i) + 6 * N_FEET
+
+
 def dense_reference(sub: KDSubproblem, args: dict[str, Any], it: KDIterate) -> dict[str, Any]:
     """The CMPC QP assembled stage by stage into dense arrays (module docstring)."""
     c = sub.config
@@ -80,12 +104,12 @@ def dense_reference(sub: KDSubproblem, args: dict[str, Any], it: KDIterate) -> d
     dts, contact = args["dts_s"], args["contact"]
     a_eq = np.zeros((sub.m_eq, n))
     b_eq = np.zeros(sub.m_eq)
-    a_eq[:NX, sub.ix(0) : sub.ix(0) + NX] = np.eye(NX)
+    a_eq[:NX, ix(0) : ix(0) + NX] = np.eye(NX)
     b_eq[:NX] = args["x0"]
-    a_eq[NX : NX + 3, sub.ipc(0) : sub.ipc(0) + 3] = np.eye(3)
+    a_eq[NX : NX + 3, ipc(0) : ipc(0) + 3] = np.eye(3)
     for k in range(h):
         dt, row = dts[k], 15 + 15 * k
-        x, x1, pc, pc1 = sub.ix(k), sub.ix(k + 1), sub.ipc(k), sub.ipc(k + 1)
+        x, x1, pc, pc1 = ix(k), ix(k + 1), ipc(k), ipc(k + 1)
         a_eq[row : row + NX, x1 : x1 + NX] += np.eye(NX)
         a_eq[row : row + NX, x : x + NX] -= np.eye(NX)
         a_eq[row : row + 6, x + 6 : x + 12] -= dt * np.eye(6)  # H_{k+1} = H_k + h_k dt
@@ -93,7 +117,7 @@ def dense_reference(sub: KDSubproblem, args: dict[str, Any], it: KDIterate) -> d
         torque = np.zeros(3)
         for i in range(N_FEET):
             f_i, arm = it.f[k, i], it.p_foot[k, i] - it.p_com[k]
-            fi, ti, pi = sub.i_f(k, i), sub.i_tau(k, i), sub.i_pf(k, i)
+            fi, ti, pi = i_f(k, i), i_tau(k, i), i_pf(k, i)
             a_eq[rl : rl + 3, fi : fi + 3] -= dt * np.eye(3)  # eqs. 14, 19
             a_eq[rk : rk + 3, ti : ti + 3] -= dt * np.eye(3)  # eq. 15: dtau
             a_eq[rk : rk + 3, pi : pi + 3] += dt * skew(f_i)  # -f x dpf
@@ -117,16 +141,16 @@ def dense_reference(sub: KDSubproblem, args: dict[str, Any], it: KDIterate) -> d
                 float(args["foot_yaw_rad"][k, i]), c.contact, c.toe_m, c.heel_m, True
             )
             rows = slice((k * N_FEET + i) * mw, (k * N_FEET + i + 1) * mw)
-            a_in[rows, sub.i_f(k, i) : sub.i_f(k, i) + 3] = cm[:, :3]
-            a_in[rows, sub.i_tau(k, i) : sub.i_tau(k, i) + 3] = cm[:, 3:]
+            a_in[rows, i_f(k, i) : i_f(k, i) + 3] = cm[:, :3]
+            a_in[rows, i_tau(k, i) : i_tau(k, i) + 3] = cm[:, 3:]
             shift = cm @ np.r_[it.f[k, i], it.tau[k, i]]
             lo[rows], hi[rows] = (l_ - shift, u_ - shift) if contact[k, i] else (-shift, -shift)
     tie0 = N_FEET * h * mw
     for k in range(h - 1):
         for i in range(N_FEET):
             rows = slice(tie0 + (k * N_FEET + i) * 3, tie0 + (k * N_FEET + i + 1) * 3)
-            a_in[rows, sub.i_pf(k + 1, i) : sub.i_pf(k + 1, i) + 3] = np.eye(3)
-            a_in[rows, sub.i_pf(k, i) : sub.i_pf(k, i) + 3] = -np.eye(3)
+            a_in[rows, i_pf(k + 1, i) : i_pf(k + 1, i) + 3] = np.eye(3)
+            a_in[rows, i_pf(k, i) : i_pf(k, i) + 3] = -np.eye(3)
             if contact[k, i] and not contact[k + 1, i]:
                 lo[rows], hi[rows] = -FREE_TIE_M, FREE_TIE_M
             else:
@@ -159,23 +183,23 @@ def dense_reference(sub: KDSubproblem, args: dict[str, Any], it: KDIterate) -> d
                 ok = t_lo <= t_hi
                 lo_abs, hi_abs = np.where(ok, t_lo, lo_abs), np.where(ok, t_hi, hi_abs)
             for k in stages:
-                col = sub.i_pf(int(k), i)
+                col = i_pf(int(k), i)
                 lb[col : col + 3] = lo_abs - it.p_foot[k, i]
                 ub[col : col + 3] = hi_abs - it.p_foot[k, i]
 
     w = np.zeros(n)
     q = np.zeros(n)
     for k in range(1, h + 1):
-        x, pc = sub.ix(k), sub.ipc(k)
+        x, pc = ix(k), ipc(k)
         w[x : x + 6], w[x + 6 : x + 12] = c.w_pose, c.w_momentum
         w[pc : pc + 3] = np.asarray(c.w_p_com) + c.reg_position
         q[x : x + 6] = -2.0 * np.asarray(c.w_pose) * args["H_ref"][k]
         q[x + 6 : x + 12] = -2.0 * np.asarray(c.w_momentum) * args["h_ref"][k]
         q[pc : pc + 3] = 2.0 * np.asarray(c.w_p_com) * (it.p_com[k] - args["p_com_ref"][k])
-    w[sub.ipc(0) : sub.ipc(0) + 3] = c.reg_position
+    w[ipc(0) : ipc(0) + 3] = c.reg_position
     for k in range(h):
         for i in range(N_FEET):
-            fi, ti, pi = sub.i_f(k, i), sub.i_tau(k, i), sub.i_pf(k, i)
+            fi, ti, pi = i_f(k, i), i_tau(k, i), i_pf(k, i)
             w[fi : fi + 3] = c.w_force + c.reg_force
             w[ti : ti + 3] = c.w_moment + c.reg_moment
             w[pi : pi + 3] = np.asarray(c.w_p_foot) + c.reg_position

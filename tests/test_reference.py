@@ -8,16 +8,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, SwingTrajectory
-from gaitnet_mpc.kinematics import pin_configuration
 from gaitnet_mpc.kinematics.reference import (
     CentroidalReference,
     ReferenceConfig,
     ReferenceTiming,
     ReferenceWorkspace,
     make_reference,
-    swing_profile,
     update_reference,
 )
 from gaitnet_mpc.robots import FEET, RobotModel, load_robot
@@ -204,26 +203,16 @@ def test_partial_first_stage_mid_swing(humanoid: Setup) -> None:
     assert ref.all_reachable
 
 
-def test_swing_profile_matches_swing_trajectory() -> None:
-    rng = np.random.default_rng(3)
-    for _ in range(5):
-        p0, p1 = rng.uniform(-0.3, 0.3, 3), rng.uniform(-0.3, 0.3, 3)
-        duration = rng.uniform(0.1, 0.5)
-        t = np.linspace(0.0, duration, 23)
-        traj = SwingTrajectory(p0, p1, duration, 0.05)
-        got = swing_profile(np.tile(p0, (23, 1)), np.tile(p1, (23, 1)), t / duration, 0.05)
-        np.testing.assert_allclose(got, traj.position(t), atol=1e-12)
-
-
 def test_configuration_and_velocity_conventions(humanoid: Setup) -> None:
-    """q_ref is pin_configuration's; v_ref is Pinocchio's local velocity of the path."""
+    """q_ref's trunk is (p_base_ref, rot_base_ref); v_ref is Pinocchio's local velocity of
+    the path."""
     s = humanoid
     ref, _, sched = _walk(s, 0.3, yaw_rate=0.5)
     assert ref.all_reachable
-    q = pin_configuration(s.robot, ref.p_base_ref, ref.rot_base_ref, ref.q_ref[:, 7:])
-    quat_sign = np.sign(np.sum(q[:, 3:7] * ref.q_ref[:, 3:7], axis=1))[:, None]
-    np.testing.assert_allclose(q[:, 3:7] * quat_sign, ref.q_ref[:, 3:7], atol=1e-12)
-    np.testing.assert_allclose(q[:, :3], ref.q_ref[:, :3])
+    quat = np.array([pin.Quaternion(r).coeffs() for r in ref.rot_base_ref])  # (h+1, 4) xyzw
+    quat_sign = np.sign(np.sum(quat * ref.q_ref[:, 3:7], axis=1))[:, None]
+    np.testing.assert_allclose(quat * quat_sign, ref.q_ref[:, 3:7], atol=1e-12)
+    np.testing.assert_allclose(ref.p_base_ref, ref.q_ref[:, :3])
     # yaw rate: body angular velocity (0, 0, 0.5) for an upright trunk
     np.testing.assert_allclose(ref.v_ref[:, 3:6], np.tile([0, 0, 0.5], (11, 1)), atol=1e-9)
     np.testing.assert_allclose(np.diff(ref.yaw_ref_rad), 0.5 * ref.dts_s)
@@ -411,15 +400,9 @@ def test_timing_from_horizon() -> None:
 
 
 def test_command_object_and_horizon_are_accepted(humanoid: Setup) -> None:
-    @dataclass(frozen=True)
-    class Command:
-        vx_mps: float = 0.3
-        vy_mps: float = 0.0
-        yaw_rate_radps: float = 0.0
-
     s = humanoid
     hz = _schedule().horizon()
-    a = make_reference(s.robot, s.q, hz, Command(), workspace=s.ws)
+    a = make_reference(s.robot, s.q, hz, Command(vx_mps=0.3), workspace=s.ws)
     b = make_reference(
         s.robot, s.q, ReferenceTiming.from_horizon(hz), (0.3, 0, 0), {}, workspace=s.ws
     )

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.cli import main
-from gaitnet_mpc.control.base import MPCStats
+from gaitnet_mpc.control.base import MomentumPrediction, MPCStats, Telemetry
 from gaitnet_mpc.results import load_run
 from gaitnet_mpc.results.plots import make_plots
-from gaitnet_mpc.runner.episode import EpisodeLog, MPCLog, _MPCProbe
+from gaitnet_mpc.runner.logs import EpisodeLog, MPCLog, TelemetryRecorder
 from gaitnet_mpc.terrain import load_course
 
 BASE_PLOTS = ("velocity.png", "course_top.png", "steps.png", "contact_torque.png")
@@ -111,24 +111,24 @@ def test_plot_and_compare_reject_a_folder_that_is_not_a_run(
 
 
 class _FakeMPCController:
-    """Exposes what ``kd`` exposes: mpc_stats, schedule and a plan with predicted states."""
+    """Reports what ``kd`` reports: mpc_stats and telemetry with a momentum prediction."""
 
     def __init__(self) -> None:
         self.mpc_stats = MPCStats()
-        self.schedule = SimpleNamespace(current_step_dt_s=0.05, stance_foot="left")
-        self.plan = None
+        self.prediction: MomentumPrediction | None = None
+
+    def telemetry(self) -> Telemetry:
+        return Telemetry(0.05, "left", self.prediction)
 
     def solve(self, t_s: float, full: bool) -> None:
-        states = np.zeros((11, 12))
-        states[1, 6], states[1, 10], states[1, 11] = 1.0 + t_s, 0.2, -0.1
-        step = SimpleNamespace(states=states)
-        self.plan = SimpleNamespace(last_step=step, dts_s=np.full(10, 0.05), t_plan_s=t_s)
+        h = np.array([1.0 + t_s, 0.0, 0.0, 0.0, 0.2, -0.1])
+        self.prediction = MomentumPrediction(t_s, t_s + 0.05, h)
         self.mpc_stats.record(0.004, 3 if full else 1, True, full)
 
 
-def test_mpc_probe_logs_each_solve_and_the_prediction() -> None:
+def test_telemetry_recorder_logs_each_solve_and_the_prediction() -> None:
     ctrl = _FakeMPCController()
-    probe = _MPCProbe(ctrl)  # type: ignore[arg-type]
+    probe = TelemetryRecorder(ctrl)  # type: ignore[arg-type]
     assert probe.stance_code() == 0.0 and probe.step_dt() == 0.05
     ctrl.solve(0.0, True)
     probe.after_compute(0.0)
@@ -153,7 +153,7 @@ def test_mpc_probe_logs_each_solve_and_the_prediction() -> None:
 
 
 def test_controller_without_mpc_writes_no_mpc_log() -> None:
-    probe = _MPCProbe(SimpleNamespace(mpc_stats=None))  # type: ignore[arg-type]
+    probe = TelemetryRecorder(SimpleNamespace(mpc_stats=None, telemetry=lambda: None))  # type: ignore[arg-type]
     probe.after_compute(0.0)
     assert probe.log is None and np.isnan(probe.stance_code()) and np.isnan(probe.step_dt())
 

@@ -11,6 +11,7 @@ from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
+from gaitnet_mpc.mpc.sequential import FixedDt
 from gaitnet_mpc.robots import FEET, load_robot
 from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import Simulator
@@ -66,6 +67,72 @@ def test_foothold_bounds_of_eq24_move_the_touchdown_across_a_gap(humanoid) -> No
     swing = ctrl.schedule.swing_foot
     td = ctrl.plan.touchdown(swing)
     assert course.foot_allowed(td[0], td[1], swing)
+
+
+class _ScriptedDt:
+    """A dt policy that answers from a script (the last entry repeats) and records calls."""
+
+    def __init__(self, script: list[float]) -> None:
+        self.script = script
+        self.calls: list[tuple[float, np.ndarray]] = []
+
+    @property
+    def nominal_dt_s(self) -> float:
+        return self.script[0]
+
+    def __call__(self, problem, iterate, dt_s: float) -> float:
+        self.calls.append((dt_s, iterate.p_foot.copy()))
+        return self.script[min(len(self.calls), len(self.script) - 1)]
+
+
+def test_dt_policy_sets_the_step_dt_inside_the_iterations(humanoid) -> None:
+    """Algorithm 1 lines 8-9: a policy that moves dt from 0.045 to 0.06 s after the first
+    QP retimes every stage, re-makes the references on the new times, and the plan
+    converges to the plan made with 0.06 s from the start."""
+    course, command = load_course("flat"), Command(vx_mps=0.5)
+    policy = _ScriptedDt([0.045, 0.045, 0.06])
+    sim = Simulator(humanoid, course)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, dt_policy=policy)
+    state = sim.state()
+    ctrl.reset(state)
+    ctrl.compute(state)
+    plan = ctrl.plan
+    assert [dt for dt, _ in policy.calls[:3]] == [0.045, 0.045, 0.06]  # dt^j it saw
+    assert plan.converged and plan.n_qps >= 3 and plan.step_dt_s == 0.06
+    np.testing.assert_allclose(plan.dts_s[1:], 0.06)  # stage 0 is partly elapsed
+    np.testing.assert_array_equal(plan.reference.timing.dts_s, plan.dts_s)
+    assert ctrl.schedule.current_step_dt_s == 0.06
+    assert ctrl.step_durations_s == [pytest.approx(5 * 0.06)]
+    # the swing now lasts the new step
+    assert ctrl.swing.duration_s == pytest.approx(5 * 0.06)
+
+    fixed = KDWalkController(humanoid, TerrainView(course), command, dt_policy=FixedDt(0.06))
+    fixed.reset(state)
+    fixed.compute(state)
+    np.testing.assert_allclose(plan.dts_s, fixed.plan.dts_s)
+    for foot in FEET:
+        np.testing.assert_allclose(plan.touchdown(foot), fixed.plan.touchdown(foot), atol=2e-3)
+    np.testing.assert_allclose(plan.iterate.p_com, fixed.plan.iterate.p_com, atol=2e-3)
+    # while the plan of 0.045 s (the nominal dt) is centimetres away: the test can tell
+    short = KDWalkController(humanoid, TerrainView(course), command, dt_policy=FixedDt(0.045))
+    short.reset(state)
+    short.compute(state)
+    assert np.abs(short.plan.iterate.p_com - plan.iterate.p_com).max() > 0.01
+
+
+def test_the_dt_policy_is_not_consulted_between_step_starts(humanoid) -> None:
+    """Remark 4: replans inside a step keep the step's dt and do not call the policy."""
+    course, command = load_course("flat"), Command(vx_mps=0.5)
+    policy = _ScriptedDt([0.05])
+    sim = Simulator(humanoid, course)
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, dt_policy=policy)
+    ctrl.reset(sim.state())
+    for _ in range(30):  # 30 ms: the step start and one replan, no new step
+        state = sim.state()
+        sim.step(ctrl.compute(state))
+    n_full = sum(ctrl.mpc_stats.full_solve)
+    assert n_full == 1 and len(ctrl.mpc_stats.full_solve) >= 2
+    assert len(policy.calls) == ctrl.mpc_stats.qps_per_solve[0]  # one call per QP of it
 
 
 @pytest.mark.slow
@@ -138,7 +205,7 @@ def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
     assert left_y.min() > y0 + 0.03
     assert right_y.max() < y0 - 0.03
     timing = ReferenceTiming.from_horizon(ctrl.schedule.horizon())
-    ref_p, _ = ctrl._lip_reference(state, timing, ctrl._command_now(state.t_s))
+    ref_p = ctrl._lip_reference(state, timing, ctrl._command_now(state.t_s)).p_m
     # the orbit is continuous and returns to the centre line at every step switch
     assert np.all(np.abs(np.diff(ref_p[:, 1])) < 0.03)
 

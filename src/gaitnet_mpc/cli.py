@@ -48,9 +48,26 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--preset",
         default=None,
-        choices=("default", "paper"),
-        help="kd only: 'default' (tuned, see README 'Deviations from the paper') or 'paper' "
-        "(Table VIII / Table V weights and limits, one-step preview, none of the additions)",
+        help="settings preset (gaitnet_mpc/presets/): kd 'default' (tuned, see README "
+        "'Deviations from the paper') or 'paper' (Table VIII / Table V weights and limits, "
+        "one-step preview, none of the additions); srbm 'default'",
+    )
+    run.add_argument(
+        "--config",
+        type=Path,
+        default=None,
+        metavar="FILE.toml",
+        help="controller settings over the preset (a partial TOML file, or a run's "
+        "config.toml to repeat its settings)",
+    )
+    run.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="one controller setting, applied last (repeatable), e.g. "
+        "sequential.kd.w_force=1e-3 or lateral_return_time_s=none",
     )
     run.add_argument(
         "--push",
@@ -168,8 +185,10 @@ def _run(args: argparse.Namespace) -> int:
     import time
 
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.registry import ControllerContext, make_controller
-    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
+    from gaitnet_mpc.config import dumps
+    from gaitnet_mpc.control.registry import ControllerContext, controller_config, make_controller
+    from gaitnet_mpc.results.io import write_atomic
+    from gaitnet_mpc.results.rundir import CONFIG, RUN_ARTIFACTS, prepare_output_folder
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.runner.episode import VideoConfig, run_episode
     from gaitnet_mpc.sim.disturbances import Push
@@ -200,11 +219,22 @@ def _run(args: argparse.Namespace) -> int:
             raise ConfigError("--preview", args.controller, "the kd controller")
         options["preview"] = True
     if args.preset is not None:
-        if args.controller != "kd":
-            raise ConfigError("--preset", args.controller, "the kd controller")
         options["preset"] = args.preset
+    if args.config is not None:
+        options["config"] = str(args.config)
+    if args.overrides:
+        options["set"] = list(args.overrides)
+    config = controller_config(
+        args.controller,
+        robot.spec.planar,
+        preset=args.preset,
+        config_file=args.config,
+        preview=args.preview,
+        dt_s=args.dt,
+        overrides=args.overrides,
+    )
     controller = make_controller(
-        args.controller, ControllerContext(robot, course, command, options)
+        args.controller, ControllerContext(robot, course, command, options, config)
     )
     sim = Simulator(robot, course, SimConfig(payload_kg=args.payload_kg, pushes=pushes))
     out = prepare_output_folder(
@@ -214,6 +244,8 @@ def _run(args: argparse.Namespace) -> int:
         artifacts=RUN_ARTIFACTS,
         overwrite=args.overwrite,
     )
+    if config is not None:
+        write_atomic(out / CONFIG, dumps(config, _config_header(args, robot.name, config)))
     warnings = _ineffective_options(args, robot.spec.planar, pushes)
     for text in warnings:
         print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
@@ -278,6 +310,22 @@ def _run(args: argparse.Namespace) -> int:
     print(f"results in {out}/")
     print(_outcome_line(summary))
     return 130 if summary["interrupted"] else 0
+
+
+def _config_header(args: argparse.Namespace, robot: str, config: object) -> str:
+    """Comment lines at the top of a run's ``config.toml``."""
+    text = (
+        f"Settings of `gaitnet-mpc run --controller {args.controller}` "
+        f"({type(config).__name__}) on {robot},\n"
+        "after the preset, --config, --preview / --dt and --set. `--config config.toml`\n"
+        'repeats them; "none" stands for None.'
+    )
+    if args.controller == "kd":
+        text += (
+            "\nsequential.kd.mass_kg and min_foot_separation_m are set from the robot; kd's\n"
+            "--dt (its MPC sampling time) is not a setting here and is given again."
+        )
+    return text
 
 
 def _ineffective_options(args: argparse.Namespace, planar: bool, pushes: tuple) -> list[str]:

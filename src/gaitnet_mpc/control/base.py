@@ -1,4 +1,5 @@
-"""The interface every controller implements, and the per-episode MPC statistics."""
+"""The interface every controller implements, its telemetry, and the per-episode MPC
+statistics."""
 
 from __future__ import annotations
 
@@ -56,6 +57,32 @@ class MPCStats:
         return out
 
 
+@dataclass(frozen=True)
+class MomentumPrediction:
+    """What a plan made at ``t_plan_s`` predicts for one stage later (``t_pred_s``): the
+    centroidal momentum ``h_pred = [l_G (kg m/s); k_G (kg m^2/s)]`` (6,)."""
+
+    t_plan_s: float
+    t_pred_s: float
+    h_pred: np.ndarray
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """What a walking controller reports at each tick (``log.csv``, ``mpc_log.csv``).
+
+    Attributes:
+        step_dt_s: MPC sampling time of the current step [s].
+        stance_foot: the foot that stands in the current step.
+        prediction: the last plan's one-stage momentum prediction (None: no plan, or a
+            controller whose MPC does not predict momentum).
+    """
+
+    step_dt_s: float
+    stance_foot: str
+    prediction: MomentumPrediction | None
+
+
 class Controller(ABC):
     """Maps a measured :class:`RobotState` to joint torques [N m] in actuator order."""
 
@@ -77,6 +104,11 @@ class Controller(ABC):
     def step_durations_s(self) -> list[float]:
         """Planned duration of each step the controller started (empty if it does not step)."""
         return []
+
+    def telemetry(self) -> Telemetry | None:
+        """This tick's telemetry, after :meth:`compute`; None for controllers without a
+        gait (e.g. ``stand``)."""
+        return None
 
     def terrain_knowledge(self) -> dict[str, object] | None:
         """What the controller knows about the terrain (``summary.json``'s

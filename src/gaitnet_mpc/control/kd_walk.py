@@ -13,18 +13,19 @@ along the course come instead from a multi-step LIP footstep plan, re-made at ev
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
-from gaitnet_mpc.command import CommandProfile
-from gaitnet_mpc.control.base import Controller, MPCStats
-from gaitnet_mpc.control.contact import ContactParams
-from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.command import Command
+from gaitnet_mpc.config import load_preset, preset_names
+from gaitnet_mpc.control.base import MomentumPrediction
+from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
+from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
-    GaitSchedule,
     GaitScheduleConfig,
     RaibertConfig,
     RaibertHeuristic,
@@ -35,8 +36,10 @@ from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
 from gaitnet_mpc.mpc.sequential import (
+    CoMReference,
     DtPolicy,
-    FixedDt,
+    FootholdBox,
+    KDProblem,
     SequentialConfig,
     SequentialKDMPC,
     SequentialResult,
@@ -67,7 +70,7 @@ def walking_kd_config() -> KDConfig:
 
 
 def walking_low_level_config() -> LowLevelConfig:
-    """Low-level gains of ``kd`` (measured, docs/kd_lateral/README.md).
+    """Low-level gains of ``kd`` (measured, docs/design/walking_low_level.md).
 
     * Swing inertial feedforward 0.75: the swing foot lands within +-0.4 cm of its aim
       instead of 3.7-5.2 cm beyond it (flat, 0.75 m/s, dt 0.045), and the biped's solves
@@ -116,7 +119,7 @@ class KDWalkConfig:
     # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
     # with feet at +-lip_half_width_m beside a centre line (see _lip_reference). "line"
     # plans a near-tightrope (feet 2-7 cm apart); "lip" a 0.19 m wide gait, but then the
-    # feet at patch edges fail more often (docs/kd_lateral/README.md).
+    # feet at patch edges fail more often (docs/design/lateral_reference.md).
     lateral_reference: str = "line"
     lip_half_width_m: float = 0.07
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
@@ -159,40 +162,17 @@ def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
 
 
 def paper_walk_config(planar: bool = False) -> KDWalkConfig:
-    """``kd --preset paper``: the paper's settings, without this project's additions.
-
-    Sub-problem weights and contact limits of Table VIII (3-D) or Table V (2-D: ``L^h`` 20,
-    ``L^H`` (200, 200, 300) on (m x, m z, pitch), ``L^{p_f}`` 0.01, ``L^{p_c}`` (100, 300) on
-    (x, z), ``f_max`` 250 N; the planar model ignores the other axes, which get the same
-    values), h = 10, h' = 5, Table X (``j_max`` 50, tolerances 1e-5 m / 0.01 N), the
-    one-step preview, no lateral foot-separation row, no swing inertial feedforward and no
-    trunk-yaw feedback (the low level of paper Sec. III: swing joint PD, stance
-    ``J_c^T`` mapping). README "Deviations from the paper" lists what the default adds.
-    """
-    if planar:
-        kd = KDConfig(
-            w_momentum=(20.0,) * 6,
-            w_pose=(200.0, 200.0, 200.0, 300.0, 300.0, 300.0),
-            w_p_foot=(0.01, 0.01, 0.01),
-            w_p_com=(100.0, 100.0, 300.0),
-            contact=ContactParams(fz_max_n=250.0),
-        )
-    else:
-        kd = KDConfig()  # Table VIII
-    return KDWalkConfig(
-        sequential=SequentialConfig(kd=kd),
-        low_level=LowLevelConfig(),
-        keep_feet_apart=False,
-        lateral_return_time_s=None,
-    )
+    """``kd --preset paper``: the paper's settings, without this project's additions; the
+    file ``presets/kd-paper.toml`` lists them (Table VIII, or for a planar robot Table V
+    from ``kd-paper.planar.toml``). README "Deviations from the paper" lists what the
+    default adds."""
+    return load_preset(KDWalkConfig, "kd", "paper", planar)
 
 
-#: Named presets of ``kd`` (``gaitnet-mpc run --controller kd --preset NAME``): the tuned
-#: default and the paper's settings, each a function of ``planar`` (the robot).
-KD_PRESETS = {
-    "default": lambda planar: KDWalkConfig(),
-    "paper": paper_walk_config,
-}
+#: Named presets of ``kd`` (``gaitnet-mpc run --controller kd --preset NAME``): the files
+#: ``presets/kd-NAME.toml`` (the tuned default, the paper's settings), each a function of
+#: ``planar`` (the robot).
+KD_PRESETS = {name: partial(load_preset, KDWalkConfig, "kd", name) for name in preset_names("kd")}
 
 
 def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
@@ -201,15 +181,7 @@ def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
     return TerrainView(course, TerrainKnowledge(multi_step=config.preview is not None))
 
 
-@dataclass(frozen=True)
-class _RampedCommand:
-    vx_mps: float
-    vy_mps: float
-    yaw_rate_radps: float
-    heading_rad: float  # commanded trunk heading now
-
-
-class KDWalkController(Controller):
+class KDWalkController(WalkingBase):
     """Sequential implicit kino-dynamic MPC + gait schedule + low-level control."""
 
     name = "kd"
@@ -218,19 +190,15 @@ class KDWalkController(Controller):
         self,
         robot: RobotModel,
         terrain: TerrainView,
-        command: object,
+        command: Command,
         dt_policy: DtPolicy | None = None,
         config: KDWalkConfig | None = None,
     ) -> None:
-        self.robot = robot
-        self.terrain = terrain
-        self.command = command
         self.config = config or KDWalkConfig()
         if self.config.preview is not None and not terrain.knowledge.multi_step:
             raise ConfigError(
                 "terrain.knowledge.multi_step", False, "True with KDWalkConfig.preview set"
             )
-        self.dt_policy: DtPolicy = dt_policy or FixedDt()
         kd = replace(
             self.config.sequential.kd,
             mass_kg=robot.total_mass_kg,
@@ -240,8 +208,14 @@ class KDWalkController(Controller):
                 robot.min_foot_separation_m if self.config.keep_feet_apart else None
             ),
         )
-        self.mpc = SequentialKDMPC(robot, replace(self.config.sequential, kd=kd))
-        self.low = LowLevelController(robot, self.config.low_level)
+        self.mpc = SequentialKDMPC(robot, replace(self.config.sequential, kd=kd), dt_policy)
+        schedule = GaitScheduleConfig(
+            default_dt_s=self.mpc.dt_policy.nominal_dt_s,
+            dt_bounds_s=self.config.sequential.dt_bounds_s,
+        )
+        super().__init__(
+            robot, terrain, command, schedule, self.config.low_level, self.config.max_accel_mps2
+        )
         planar = robot.spec.planar
         self.raibert = RaibertHeuristic(
             RaibertConfig(
@@ -250,21 +224,10 @@ class KDWalkController(Controller):
                 max_lateral_separation_m=0.0 if planar else 0.30,
             )
         )
-        dt0 = self.dt_policy(np.zeros(1), np.zeros(1), None, 0.045)  # type: ignore[arg-type]
-        self.schedule = GaitSchedule(GaitScheduleConfig(default_dt_s=dt0))
-        self._stats = MPCStats()
-        self._steps: list[float] = []
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
-        self.schedule.reset(state.t_s)
-        self.t0_s = state.t_s
-        self.profile = CommandProfile(
-            self.command, state.t_s, float(state.base_rpy_rad[2]), self.config.max_accel_mps2
-        )
-        self.com0 = state.com_world_m.copy()
-        self.ground_z = min(float(p[2]) for p in state.foot_pos_world_m.values())
-        self.ground_z -= self.robot.spec.foot_contact_radius_m
+        super().reset(state)
         self.liftoff = {f: state.foot_pos_world_m[f].copy() for f in FEET}
         self.swing: SwingTrajectory | None = None
         self.plan: SequentialResult | None = None
@@ -273,16 +236,12 @@ class KDWalkController(Controller):
         self.preview: PreviewPlan | None = None
         self._preview_t0_s = 0.0
 
-    @property
-    def mpc_stats(self) -> MPCStats:
-        return self._stats
-
-    @property
-    def step_durations_s(self) -> list[float]:
-        return self._steps
-
-    def terrain_knowledge(self) -> dict[str, object]:
-        return self.terrain.knowledge.to_dict()
+    def _prediction(self) -> MomentumPrediction | None:
+        plan = self.plan
+        if plan is None or plan.last_step is None:
+            return None
+        t_pred = plan.t_plan_s + float(plan.dts_s[0])
+        return MomentumPrediction(plan.t_plan_s, t_pred, plan.last_step.states[1, 6:12].copy())
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
@@ -295,16 +254,13 @@ class KDWalkController(Controller):
         return out
 
     # ---------------------------------------------------------------- helpers
-    def _command_now(self, t_s: float) -> _RampedCommand:
+    def _command_now(self, t_s: float) -> Command:
+        """The command ramped up from rest (:class:`CommandProfile`)."""
         c = self.command
         k = self.profile.ramp(t_s - self.t0_s)
-        return _RampedCommand(
-            k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps, self.profile.heading_rad(t_s)
-        )
+        return Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
 
-    def _raibert(
-        self, state: RobotState, foot: str, t_td: float, cmd: _RampedCommand
-    ) -> np.ndarray:
+    def _raibert(self, state: RobotState, foot: str, t_td: float, cmd: Command) -> np.ndarray:
         p = self.raibert.foothold(
             foot,
             p_com_world_m=state.com_world_m,
@@ -342,7 +298,7 @@ class KDWalkController(Controller):
         out[:2] += np.clip(self._commanded_path_xy(state.t_s) - out[:2], -lim, lim)
         return out
 
-    def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, tuple]:
+    def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, FootholdBox]:
         """Eq. 24 box for the swing foot's next touchdown.
 
         With a preview plan, the box of the patch it chose. Otherwise (one-step preview)
@@ -370,11 +326,11 @@ class KDWalkController(Controller):
         hi[2] += r
         if self.robot.spec.planar:
             lo[1], hi[1] = -np.inf, np.inf
-        return {foot: (lo, hi, None)}
+        return {foot: FootholdBox(lo, hi)}
 
     def _lip_reference(
-        self, state: RobotState, timing: ReferenceTiming, cmd: _RampedCommand
-    ) -> tuple[np.ndarray, np.ndarray] | None:
+        self, state: RobotState, timing: ReferenceTiming, cmd: Command
+    ) -> CoMReference | None:
         """CoM path and velocity (h+1, 3) whose lateral part is the LIP sway orbit.
 
         With a line foot (no roll moment) the CoM obeys ``y'' = omega^2 (y - p_y)`` about the
@@ -415,7 +371,7 @@ class KDWalkController(Controller):
         y_off = side[kk] * b * (1.0 - np.cosh(w * (tau - T / 2)) / den)
         v_off = -side[kk] * b * w * np.sinh(w * (tau - T / 2)) / den
         # centre line: commanded path, lateral offset from the measured CoM
-        yaw = cmd.heading_rad
+        yaw = self.profile.heading_rad(state.t_s)
         e_x = np.array([np.cos(yaw), np.sin(yaw)])
         e_y = np.array([-np.sin(yaw), np.cos(yaw)])
         lat = float(e_y @ (self._commanded_path_xy(state.t_s) - state.com_world_m[:2]))
@@ -428,9 +384,9 @@ class KDWalkController(Controller):
         v = np.full((h + 1, 3), np.nan)
         p[:, :2] = centre + y_off[:, None] * e_y
         v[:, :2] = v_cmd + v_off[:, None] * e_y
-        return p, v
+        return CoMReference(p, v)
 
-    def _plan_preview(self, state: RobotState, cmd: _RampedCommand, first_step: bool) -> None:
+    def _plan_preview(self, state: RobotState, cmd: Command, first_step: bool) -> None:
         """Multi-step LIP footstep plan from now (None if off, planar, or without a
         solution: then the one-step preview applies). Within a step (``first_step``
         False) the patch of the next touchdown stays the one chosen at the step start."""
@@ -479,8 +435,8 @@ class KDWalkController(Controller):
         return out
 
     def _com_reference(
-        self, state: RobotState, timing: ReferenceTiming, cmd: _RampedCommand
-    ) -> tuple[np.ndarray, np.ndarray] | None:
+        self, state: RobotState, timing: ReferenceTiming, cmd: Command
+    ) -> CoMReference | None:
         """CoM path and velocity (h+1, 3) that replace f_ref's where not NaN: laterally the
         LIP sway orbit (``lateral_reference="lip"``) or, with ``lateral_return_time_s``, the
         commanded path plus the measured offset decaying along the horizon (world y: the
@@ -496,20 +452,22 @@ class KDWalkController(Controller):
             return ref
         if ref is None:
             shape = (timing.times_s.size, 3)
-            ref = (np.full(shape, np.nan), np.full(shape, np.nan))
+            ref = CoMReference(np.full(shape, np.nan), np.full(shape, np.nan))
         if self.preview is not None:
             pos, vel = self.preview.com_at(timing.times_s + (state.t_s - self._preview_t0_s))
-            ref[0][:, 0], ref[1][:, 0] = pos[:, 0], vel[:, 0]
+            ref.p_m[:, 0], ref.v_mps[:, 0] = pos[:, 0], vel[:, 0]
         if line_return:
             y_path = float(self._commanded_path_xy(state.t_s)[1])
             err = float(state.com_world_m[1]) - y_path
             decay = np.exp(-timing.times_s / tau)
-            ref[0][:, 1] = y_path + err * decay
-            ref[1][:, 1] = -err / tau * decay
+            ref.p_m[:, 1] = y_path + err * decay
+            ref.v_mps[:, 1] = -err / tau * decay
         return ref
 
     # ---------------------------------------------------------------- planning
     def _solve(self, state: RobotState, full: bool) -> None:
+        """Algorithm 1 from ``state``; ``full`` at a step start, where the dt policy sets
+        the step's dt inside the iterations (Remark 4)."""
         sched = self.schedule
         q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
         cmd = self._command_now(state.t_s)
@@ -529,25 +487,27 @@ class KDWalkController(Controller):
         nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
         if self.preview is not None:
             nxt = self._on_preview(nxt, 2)
-        footholds = {swing: target[None, :], stance: nxt[None, :]}
-        h = timing.horizon
-        yaw = np.full((h, 2), self.profile.heading_rad(state.t_s))
+        heading = self.profile.heading_rad(state.t_s)
+        yaw = np.full((timing.horizon, 2), heading)
         yaw[:, FEET.index(stance)] = state.foot_yaw_rad[stance]
+        problem = KDProblem(
+            q=q,
+            v=v,
+            timing=timing,
+            command=cmd,
+            heading_rad=heading,
+            footholds_m={swing: target[None, :], stance: nxt[None, :]},
+            p_foot_now_m=state.foot_pos_world_m,
+            p_liftoff_m={swing: self.liftoff[swing]},
+            foot_yaw_rad=yaw,
+            foothold_boxes=self._bounds(state, swing, target),
+            p_com_start_m=self._path_start(state),
+            com_reference=lambda t: self._com_reference(state, t, cmd),
+            j_max=None if full else self.config.replan_j_max,
+            choose_dt=full,
+        )
         try:
-            result = self.mpc.solve(
-                q,
-                v,
-                timing,
-                cmd,
-                footholds,
-                p_foot_now_m=state.foot_pos_world_m,
-                p_liftoff_m={swing: self.liftoff[swing]},
-                foot_yaw_rad=yaw,
-                foothold_bounds=self._bounds(state, swing, target),
-                j_max=None if full else self.config.replan_j_max,
-                p_com_start_m=self._path_start(state),
-                com_reference=self._com_reference(state, timing, cmd),
-            )
+            result = self.mpc.solve(problem)
         except QPSolveError:
             self._stats.record(0.0, 1, False, full)
             return  # keep the last good plan
@@ -555,19 +515,31 @@ class KDWalkController(Controller):
         self._stats.record(result.solve_time_s, result.n_qps, result.converged, full)
         self.plan = result
         td = result.touchdown(swing)
+        if full and result.step_dt_s != sched.current_step_dt_s:
+            sched.set_step_dt(result.step_dt_s)  # the policy's dt: the swing lasts h' dt
+            sched.set_next_step_dt(result.step_dt_s)  # and dt^0 of the next step
+            self.swing = self._swing_trajectory(target if td is None else td)
         if td is not None and self.swing is not None:
             td = td.copy()
             td[2] -= self.config.touchdown_depth_m
             if sched.phase_in_step < 0.85:
                 self.swing.retarget(td, sched.time_in_step_s)
 
+    def _swing_trajectory(self, target: np.ndarray) -> SwingTrajectory:
+        """Swing of the step that starts, from its lift-off point to ``target``."""
+        sched = self.schedule
+        start = self.liftoff[sched.swing_foot]
+        x0, x1 = sorted((start[0], target[0]))
+        obstacles = self.terrain.swing_obstacles(x0 - 0.1, x1 + 0.2)
+        return self.config.swing.trajectory(
+            start,
+            target,
+            sched.current_step_duration_s,
+            [(o.x_min, o.x_max, o.z_top_m) for o in obstacles],
+        )
+
     def _start_step(self, state: RobotState) -> None:
         sched = self.schedule
-        q, v = self.robot.mj_to_pin(state.qpos, state.qvel)
-        iterate = self.plan.iterate if self.plan is not None else None
-        dt = sched.clip_dt(self.dt_policy(q, v, iterate, sched.current_step_dt_s))
-        sched.set_step_dt(dt)
-        self._steps.append(sched.current_step_duration_s)
         swing = sched.swing_foot
         self.liftoff[swing] = state.foot_pos_world_m[swing].copy()
         cmd = self._command_now(state.t_s)
@@ -575,15 +547,9 @@ class KDWalkController(Controller):
         self._plan_preview(state, cmd, first_step=True)
         if self.preview is not None:
             target = self._on_preview(target, 1)
-        x0, x1 = sorted((self.liftoff[swing][0], target[0]))
-        obstacles = self.terrain.swing_obstacles(x0 - 0.1, x1 + 0.2)
-        self.swing = self.config.swing.trajectory(
-            self.liftoff[swing],
-            target,
-            sched.current_step_duration_s,
-            [(o.x_min, o.x_max, o.z_top_m) for o in obstacles],
-        )
+        self.swing = self._swing_trajectory(target)
         self._solve(state, full=True)
+        self._steps.append(sched.current_step_duration_s)
         self.next_replan_s = state.t_s + self.config.replan_period_s
 
     # ---------------------------------------------------------------- control

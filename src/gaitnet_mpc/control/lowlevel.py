@@ -11,7 +11,7 @@
   with 0.225 s steps the foot accelerates at ~40 m/s^2, the hip needs ~7 N m and the
   PD (60 N m/rad) lags by ~0.1 rad, and ``kd``'s feet landed 3.7-5.2 cm beyond their aim;
   with ``a = 0.75`` the error was within +-0.4 cm (1.0 landed 1-1.7 cm short, 0.5 up to
-  1.7 cm long; flat, dt 0.045, ``docs/kd_lateral/scripts/tdlog.py``).
+  1.7 cm long; flat, dt 0.045, ``docs/design/walking_low_level.md``).
 * Optional trunk-yaw feedback on the stance hip-yaw joint (off by default): the stance foot
   is fixed to the ground, so a hip-yaw torque ``tau`` turns the pelvis by ``-tau``;
   ``tau += kp (psi - psi_cmd) + kd psi_dot`` holds the commanded heading. Measured with

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.stance import StanceMap
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import WalkingConfig, WalkingController
@@ -48,7 +49,7 @@ class SRBMWalkController(WalkingController):
         self,
         robot: RobotModel,
         terrain: TerrainView,
-        command: object,
+        command: Command,
         config: SRBMWalkConfig | None = None,
     ) -> None:
         c = config or SRBMWalkConfig()

@@ -21,10 +21,10 @@ import numpy as np
 import pinocchio as pin
 
 from gaitnet_mpc.control.base import Controller
-from gaitnet_mpc.control.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.control.stance import StanceMap
+from gaitnet_mpc.geometry import GRAVITY_MPS2, skew
+from gaitnet_mpc.mpc.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.mpc.qp import QPProblem, make_workspace
-from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2, skew
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 

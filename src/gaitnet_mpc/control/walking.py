@@ -4,9 +4,10 @@ Per control tick (1 kHz): advance the gait schedule; at each step start, plan th
 foot's foothold (Raibert heuristic evaluated at the LIP-predicted touchdown state) and its
 swing trajectory; every ``replan_period_s`` (and at each step start or touchdown) run the
 subclass's MPC (:meth:`WalkingController._replan`); send the stance wrenches of the plan
-and the swing target to the low-level controller. ``srbm`` is built on it. ``kd`` is not
-yet: on this base with the sub-problem's weights its footholds drift toward the CoM line
-(see ``control/kd_walk.py`` and the notes of issue 5).
+and the swing target to the low-level controller. ``srbm`` is built on it; ``kd`` shares
+only :class:`~gaitnet_mpc.control.walking_base.WalkingBase` (its footholds come from the
+MPC, and on this class's LIP/Raibert planning with the sub-problem's weights they drifted
+toward the CoM line).
 
 Design notes (each setting of :class:`WalkingConfig` says why it has its value):
 
@@ -51,12 +52,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from gaitnet_mpc.command import CommandProfile
-from gaitnet_mpc.control.base import Controller, MPCStats
-from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
+from gaitnet_mpc.command import Command
+from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
+from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.gait import (
-    GaitSchedule,
     GaitScheduleConfig,
     LandingBias,
     RaibertConfig,
@@ -174,7 +174,7 @@ def swing_beside_stance(
     )
 
 
-class WalkingController(Controller):
+class WalkingController(WalkingBase):
     """Gait schedule + LIP/Raibert footholds + swing + low-level control around an MPC.
 
     Subclasses build their MPC, implement :meth:`_replan` (which sets the stance wrenches
@@ -185,34 +185,28 @@ class WalkingController(Controller):
         self,
         robot: RobotModel,
         terrain: TerrainView,
-        command: object,
+        command: Command,
         config: WalkingConfig,
     ) -> None:
-        self.robot = robot
-        self.terrain = terrain
-        self.command = command
+        super().__init__(
+            robot,
+            terrain,
+            command,
+            GaitScheduleConfig(default_dt_s=config.dt_s),
+            config.low_level,
+            config.max_accel_mps2,
+        )
         self.config = config
-        self.low = LowLevelController(robot, config.low_level)
         self._pin_data = robot.pin_model.createData()
-        self.schedule = GaitSchedule(GaitScheduleConfig(default_dt_s=config.dt_s))
-        self._stats = MPCStats()
-        self._steps: list[float] = []
 
     # --------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
         c = self.config
-        self.schedule.reset(state.t_s)
-        self.t0_s = state.t_s
+        super().reset(state)
         self.t_prev_s = state.t_s
-        self.com0 = state.com_world_m.copy()
         self.path_xy = state.com_world_m[:2].copy()
-        self.profile = CommandProfile(
-            self.command, state.t_s, float(state.base_rpy_rad[2]), c.max_accel_mps2
-        )
         self.z_start = float(state.com_world_m[2])
         self.z_walk = c.com_height_m or self.z_start + c.com_height_offset_m
-        self.ground_z = float(min(p[2] for p in state.foot_pos_world_m.values()))
-        self.ground_z -= self.robot.spec.foot_contact_radius_m
         planar = self.robot.spec.planar
         step_s = self.schedule.config.stages_per_step * c.dt_s
         self.omega, k_v, lateral, self.cmd_scale = lip_gains(
@@ -239,17 +233,6 @@ class WalkingController(Controller):
         )
         self.step_seen = -1
         self.next_replan_s = -np.inf
-
-    @property
-    def mpc_stats(self) -> MPCStats:
-        return self._stats
-
-    @property
-    def step_durations_s(self) -> list[float]:
-        return self._steps
-
-    def terrain_knowledge(self) -> dict[str, object]:
-        return self.terrain.knowledge.to_dict()
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         foot = self.schedule.swing_foot

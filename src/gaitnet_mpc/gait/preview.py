@@ -27,7 +27,7 @@ alternate and each later step lasts ``stages_per_step * dt``: the fixed dt of th
 policy. Each stage is integrated exactly (``cosh``/``sinh``), so the dynamics are linear
 equalities. Positions are world x (the course axis) and y.
 
-``docs/kd_lateral/scripts/lip_stones.py`` runs the sagittal part over the whole
+``benchmarks/lip_stones.py`` runs the sagittal part over the whole
 ``stepping-stones`` course: with dt 0.045-0.07 s it has solutions at near-constant speed,
 so the fixed-dt baseline can cross in principle.
 """
@@ -43,7 +43,7 @@ import scipy.sparse as sp
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
+from gaitnet_mpc.geometry import GRAVITY_MPS2
 from gaitnet_mpc.robots.spec import FEET
 from gaitnet_mpc.terrain import Course
 

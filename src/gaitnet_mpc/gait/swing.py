@@ -25,6 +25,11 @@ whether the final trajectory clears every obstacle.
 
 :meth:`SwingTrajectory.retarget` moves the touchdown point mid-swing while keeping position,
 velocity and acceleration continuous at the retarget time.
+
+:func:`swing_profile` is the obstacle-free trajectory in closed form (``σ`` from
+:func:`min_jerk`), vectorised over many swings at once for the reference trajectory; it
+equals :meth:`SwingTrajectory.position` to rounding (1e-12 m, tested) without building the
+piecewise polynomials (~0.5 ms per trajectory).
 """
 
 from __future__ import annotations
@@ -38,84 +43,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gait.quintic import PiecewiseQuintic, quintic_coeffs
 
-__all__ = ["SwingConfig", "SwingTrajectory", "obstacle_array"]
+__all__ = ["SwingConfig", "SwingTrajectory", "min_jerk", "obstacle_array", "swing_profile"]
 
 #: Samples of the clearance check over one swing.
 _N_CHECK = 401
 #: Tolerance [m] of the clearance check.
 _CLEAR_TOL_M = 1e-9
-
-
-# ----------------------------------------------------------------------------------------------
-# Piecewise quintic polynomials
-# ----------------------------------------------------------------------------------------------
-
-
-def _quintic_coeffs(
-    p0: np.ndarray,
-    v0: np.ndarray,
-    a0: np.ndarray,
-    p1: np.ndarray,
-    v1: np.ndarray,
-    a1: np.ndarray,
-    duration_s: float,
-) -> np.ndarray:
-    """(6, d) coefficients c_k of ``p(s) = Σ c_k s^k``, s in [0, D], meeting (p, v, a) at ends.
-
-    All boundary arrays have shape (d,).
-    """
-    D = duration_s
-    dp = p1 - p0
-    c3 = (20.0 * dp - (8.0 * v1 + 12.0 * v0) * D - (3.0 * a0 - a1) * D**2) / (2.0 * D**3)
-    c4 = (-30.0 * dp + (14.0 * v1 + 16.0 * v0) * D + (3.0 * a0 - 2.0 * a1) * D**2) / (2.0 * D**4)
-    c5 = (12.0 * dp - 6.0 * (v1 + v0) * D + (a1 - a0) * D**2) / (2.0 * D**5)
-    return np.stack([p0, v0, 0.5 * a0, c3, c4, c5])  # (6, d)
-
-
-class _Piecewise:
-    """Piecewise quintic in d dimensions: breaks (n+1,), coefficients (n, 6, d)."""
-
-    _K = np.arange(6)
-
-    def __init__(self, breaks: np.ndarray, coeffs: np.ndarray) -> None:
-        self.breaks = breaks  # (n+1,)
-        self.coeffs = coeffs  # (n, 6, d)
-
-    @classmethod
-    def single(cls, t0: float, t1: float, coeffs: np.ndarray) -> _Piecewise:
-        return cls(np.array([t0, t1]), coeffs[None])
-
-    def eval(self, t: np.ndarray, deriv: int = 0) -> np.ndarray:
-        """(N, d) value (deriv 0), velocity (1) or acceleration (2) at times t (N,)."""
-        n = len(self.breaks) - 1
-        idx = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, n - 1)  # (N,)
-        s = (t - self.breaks[idx])[:, None]  # (N, 1)
-        k = self._K
-        if deriv == 0:
-            w = s**k
-        elif deriv == 1:
-            w = np.where(k >= 1, k * s ** np.maximum(k - 1, 0), 0.0)
-        else:
-            w = np.where(k >= 2, k * (k - 1) * s ** np.maximum(k - 2, 0), 0.0)
-        return np.einsum("nk,nkd->nd", w, self.coeffs[idx])  # (N, 6)·(N, 6, d)
-
-    def truncated(self, t_cut: float) -> _Piecewise:
-        """The pieces before ``t_cut`` (the last one ends at ``t_cut``)."""
-        n_keep = min(int(np.searchsorted(self.breaks, t_cut, side="left")), len(self.coeffs))
-        if n_keep == 0:
-            return _Piecewise(self.breaks[:1].copy(), self.coeffs[:0].copy())
-        breaks = np.append(self.breaks[:n_keep], t_cut)
-        return _Piecewise(breaks, self.coeffs[:n_keep].copy())
-
-    def then(self, other: _Piecewise) -> _Piecewise:
-        """Concatenation; ``other`` must start where ``self`` ends."""
-        if len(self.coeffs) == 0:
-            return other
-        breaks = np.concatenate([self.breaks, other.breaks[1:]])
-        keep = breaks[1:] > breaks[:-1]  # drop zero-length pieces
-        coeffs = np.concatenate([self.coeffs, other.coeffs])[keep]
-        return _Piecewise(np.append(breaks[:-1][keep], breaks[-1]), coeffs)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -234,8 +169,8 @@ class SwingConfig:
 class _Plan:
     """A candidate remainder of the swing from the re-plan time on."""
 
-    xy: _Piecewise
-    z: _Piecewise
+    xy: PiecewiseQuintic
+    z: PiecewiseQuintic
     apex_z_m: float
     clearance_ok: bool
     target_apex_z_m: float
@@ -289,8 +224,8 @@ class SwingTrajectory:
             max_lift_fraction=max_lift_fraction,
         )
         self._obstacles = obstacle_array(obstacles)  # (n, 3)
-        empty = _Piecewise(np.zeros(1), np.zeros((0, 6, 1)))
-        self._xy = _Piecewise(np.zeros(1), np.zeros((0, 6, 2)))
+        empty = PiecewiseQuintic(np.zeros(1), np.zeros((0, 6, 1)))
+        self._xy = PiecewiseQuintic(np.zeros(1), np.zeros((0, 6, 2)))
         self._z = empty
         self._apex_z_m = float("nan")
         self._clearance_ok = True
@@ -361,7 +296,7 @@ class SwingTrajectory:
 
     def _horizontal(
         self, t_a: float, p: np.ndarray, v: np.ndarray, a: np.ndarray, lift_s: float
-    ) -> _Piecewise | None:
+    ) -> PiecewiseQuintic | None:
         """xy on [t_a, T]: still until ``lift_s`` (if at rest), quintic, still for ``lift_s``.
 
         None if the moving window would be shorter than half the remaining time.
@@ -373,19 +308,21 @@ class SwingTrajectory:
         if t_e - t_s < 0.5 * (T - t_a) and lift_s > 0.0:
             return None
         zero = np.zeros(2)
-        out = _Piecewise(np.array([t_a]), np.zeros((0, 6, 2)))
+        out = PiecewiseQuintic(np.array([t_a]), np.zeros((0, 6, 2)))
         if t_s > t_a:
-            out = _Piecewise.single(t_a, t_s, _quintic_coeffs(p, zero, zero, p, zero, zero, 1.0))
+            out = PiecewiseQuintic.single(
+                t_a, t_s, quintic_coeffs(p, zero, zero, p, zero, zero, 1.0)
+            )
         p1 = self._p1[:2]
         out = out.then(
-            _Piecewise.single(t_s, t_e, _quintic_coeffs(p, v, a, p1, zero, zero, t_e - t_s))
+            PiecewiseQuintic.single(t_s, t_e, quintic_coeffs(p, v, a, p1, zero, zero, t_e - t_s))
         )
         if t_e < T:
-            rest = _quintic_coeffs(p1, zero, zero, p1, zero, zero, 1.0)
-            out = out.then(_Piecewise.single(t_e, T, rest))
+            rest = quintic_coeffs(p1, zero, zero, p1, zero, zero, 1.0)
+            out = out.then(PiecewiseQuintic.single(t_e, T, rest))
         return out
 
-    def _vertical(self, xy: _Piecewise, t_a: float, z_state: np.ndarray) -> _Plan:
+    def _vertical(self, xy: PiecewiseQuintic, t_a: float, z_state: np.ndarray) -> _Plan:
         """z on [t_a, T] from the state (z, vz, az) at t_a, for the horizontal path ``xy``."""
         cfg = self.config
         T = self._T
@@ -398,15 +335,15 @@ class SwingTrajectory:
         floor = base_z + cfg.apex_height_m if rising else float(z_state[0])
         t_mid = 0.5 * T if rising else t_a + 0.5 * (T - t_a)
 
-        def pieces(apex: float) -> _Piecewise:
+        def pieces(apex: float) -> PiecewiseQuintic:
             top = (np.array([apex]), np.zeros(1), np.zeros(1))
-            up = _Piecewise.single(t_a, t_mid, _quintic_coeffs(*start, *top, t_mid - t_a))
-            down = _Piecewise.single(t_mid, T, _quintic_coeffs(*top, *end, T - t_mid))
+            up = PiecewiseQuintic.single(t_a, t_mid, quintic_coeffs(*start, *top, t_mid - t_a))
+            down = PiecewiseQuintic.single(t_mid, T, quintic_coeffs(*top, *end, T - t_mid))
             return up.then(down)
 
         if len(self._obstacles) == 0 and rising:  # nothing to clear: no grid needed
             return _Plan(xy, pieces(floor), floor, True, floor)
-        single = _Piecewise.single(t_a, T, _quintic_coeffs(*start, *end, T - t_a))
+        single = PiecewiseQuintic.single(t_a, T, quintic_coeffs(*start, *end, T - t_a))
         if len(self._obstacles) == 0:
             return _Plan(xy, single, self._apex_z_m, True, floor, direct_descent=True)
 
@@ -498,3 +435,44 @@ class SwingTrajectory:
             f"SwingTrajectory(p0={self._p0.tolist()}, p1={self._p1.tolist()}, "
             f"T={self._T:.4f} s, apex_z={self._apex_z_m:.4f} m, clearance_ok={self._clearance_ok})"
         )
+
+
+# ----------------------------------------------------------------------------------------------
+# Obstacle-free swing path in closed form
+# ----------------------------------------------------------------------------------------------
+
+
+def min_jerk(s: np.ndarray) -> np.ndarray:
+    """Minimum-jerk blend ``σ(s) = 10 s³ - 15 s⁴ + 6 s⁵`` (zero rate and acceleration at 0, 1)."""
+    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
+
+
+def swing_profile(
+    p0_m: np.ndarray, p1_m: np.ndarray, phase: np.ndarray, apex_height_m: float
+) -> np.ndarray:
+    """Obstacle-free path of :class:`SwingTrajectory` (zero touchdown speed), vectorised.
+
+    x-y: ``p0 + (p1 - p0) σ(s)``; z: rise from ``z0`` to the apex ``max(z0, z1) +
+    apex_height_m`` over ``s`` in [0, 1/2] and descent to ``z1`` over [1/2, 1], each
+    ``σ``-shaped. ``s = 0`` gives ``p0`` exactly and ``s = 1`` gives ``p1`` up to rounding.
+
+    Args:
+        p0_m: (N, 3) lift-off points [m].
+        p1_m: (N, 3) touchdown points [m].
+        phase: (N,) normalised swing time ``s = t / T`` in [0, 1].
+        apex_height_m: apex above ``max(z0, z1)`` [m].
+
+    Returns:
+        (N, 3) foot positions [m].
+    """
+    s = np.clip(phase, 0.0, 1.0)
+    out = p0_m + (p1_m - p0_m) * min_jerk(s)[:, None]
+    z0, z1 = p0_m[:, 2], p1_m[:, 2]
+    apex = np.maximum(z0, z1) + apex_height_m
+    rise = s < 0.5
+    out[:, 2] = np.where(
+        rise,
+        z0 + (apex - z0) * min_jerk(np.minimum(2.0 * s, 1.0)),
+        apex + (z1 - apex) * min_jerk(np.maximum(2.0 * s - 1.0, 0.0)),
+    )
+    return out

@@ -121,7 +121,7 @@ def _rot_rpy(quat_xyzw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _root_maps(
     rot: np.ndarray, rpy: np.ndarray, v: np.ndarray | None
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Free-flyer blocks of ``T`` and ``dT/dt`` (module docstring), batched over K.
 
     Args:
@@ -129,7 +129,7 @@ def _root_maps(
 
     Returns:
         ``T6`` (K, 6, 6) = ``blkdiag(R^T, J_rpy)``, and if ``v`` is given ``dT6`` (K, 6, 6) =
-        ``blkdiag(-[omega]x R^T, dJ_rpy)`` and ``rpy_dot`` (K, 3).
+        ``blkdiag(-[omega]x R^T, dJ_rpy)``.
     """
     k_stages = rpy.shape[0]
     sr, cr = np.sin(rpy[:, 0]), np.cos(rpy[:, 0])
@@ -145,12 +145,11 @@ def _root_maps(
     jac[:, 2, 1] = -sr
     jac[:, 2, 2] = cr * cp
     if v is None:
-        return t6, None, None
+        return t6, None
     wx, wy, wz = v[:, 3], v[:, 4], v[:, 5]
     a = sr * wy + cr * wz  # = cos(pitch) yaw_dot
-    dr = wx + sp / cp * a
-    dp = cr * wy - sr * wz
-    rpy_dot = np.stack([dr, dp, a / cp], axis=1)  # J^-1 omega
+    dr = wx + sp / cp * a  # roll rate
+    dp = cr * wy - sr * wz  # pitch rate
     dt6 = np.zeros((k_stages, 6, 6))
     skew = (v[:, 3:6] @ _SKEW).reshape(-1, 3, 3)
     dt6[:, :3, :3] = -skew @ rot_t  # d/dt R^T = -[omega_body]x R^T
@@ -160,7 +159,7 @@ def _root_maps(
     djac[:, 1, 2] = cr * cp * dr - sr * sp * dp
     djac[:, 2, 1] = -cr * dr
     djac[:, 2, 2] = -sr * cp * dr - cr * sp * dp
-    return t6, dt6, rpy_dot
+    return t6, dt6
 
 
 # --------------------------------------------------------------------- eq. 6 / 11
@@ -258,20 +257,6 @@ def euler_coordinates(model: pin.Model | RobotModel, q: np.ndarray) -> np.ndarra
     return xi if q.ndim == 2 else xi[0]
 
 
-def euler_coordinate_rates(
-    model: pin.Model | RobotModel, q: np.ndarray, v: np.ndarray
-) -> np.ndarray:
-    """``xi_dot`` (nv,) with ``v = T(xi) xi_dot``: ``[R v_lin, J_rpy^-1 omega, qdot_j]``."""
-    m = _pin_model(model)
-    q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-    if not _has_free_flyer(m):
-        return v.copy()
-    rot, rpy = _rot_rpy(q[None, 3:7])
-    _, _, rpy_dot = _root_maps(rot, rpy, v[None])
-    assert rpy_dot is not None
-    return np.concatenate([rot[0] @ v[0:3], rpy_dot[0], v[6:]])
-
-
 def _euler_maps(
     m: pin.Model, d: pin.Data, q: np.ndarray, v: np.ndarray, with_dot: bool = True
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
@@ -289,7 +274,7 @@ def _euler_maps(
     rot, rpy = _rot_rpy(q[:, 3:7])
     if k_stages > 1:  # a single sample is its own unwrapping (np.unwrap costs ~40 us)
         rpy = np.unwrap(rpy, axis=0)
-    t6, dt6, _ = _root_maps(rot, rpy, v if with_dot else None)
+    t6, dt6 = _root_maps(rot, rpy, v if with_dot else None)
     a_root = a_xi[:, :, :6].copy()  # (K, 6, 6), Pinocchio's local root columns
     if da_xi is not None and dt6 is not None:  # dA_xi = dA_G T + A_G dT
         da_xi[:, :, :6] = da_xi[:, :, :6] @ t6 + a_root @ dt6
@@ -305,18 +290,6 @@ def centroidal_map_euler(
     m = _pin_model(model)
     q = np.asarray(q, dtype=float).reshape(1, m.nq)
     return _euler_maps(m, _data(m, data), q, np.zeros((1, m.nv)), with_dot=False)[0][0]
-
-
-def centroidal_map_euler_dot(
-    model: pin.Model | RobotModel, data: pin.Data | None, q: np.ndarray, v: np.ndarray
-) -> np.ndarray:
-    """``dA_xi = dA_G T + A_G dT`` (6, nv), the time derivative of :func:`centroidal_map_euler`."""
-    m = _pin_model(model)
-    q = np.asarray(q, dtype=float).reshape(1, m.nq)
-    v = np.asarray(v, dtype=float).reshape(1, m.nv)
-    da_xi = _euler_maps(m, _data(m, data), q, v)[1]
-    assert da_xi is not None
-    return da_xi[0]
 
 
 # ------------------------------------------------------------ centroidal pose H

@@ -88,6 +88,8 @@ Planar biped leg (``biped2d``)
 ``l1, l2`` hanging along ``-z`` (the foot point is the end of the shank); step 6 of the
 5-DoF leg with the target rotated into the trunk frame by the trunk pitch (the root hinge
 about ``y``).
+
+Kept whole (~500 lines, 90 of them this derivation): both legs share readers and solver.
 """
 
 from __future__ import annotations
@@ -96,8 +98,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-import pinocchio as pin
 
+from gaitnet_mpc.geometry import wrap_angle
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
@@ -312,12 +314,6 @@ def _as_batch(
     return p_f, p_b, rot
 
 
-def trunk_yaw_rad(rot_trunk_world: np.ndarray) -> np.ndarray:
-    """Heading of the trunk x axis, ``atan2(R[1,0], R[0,0])`` (ZYX yaw), (N,) from (N,3,3)."""
-    rot = np.asarray(rot_trunk_world, dtype=float).reshape(-1, 3, 3)
-    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
-
-
 # ---------------------------------------------------------------------- 5-DoF leg IK
 def leg_ik(
     geom: LegGeometry,
@@ -360,7 +356,7 @@ def leg_ik(
         gx, gy, gz = up_trunk.T
     else:
         dpsi = np.asarray(foot_yaw_rad, dtype=float) - np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
-        q_raw[:, 0] = np.arctan2(np.sin(dpsi), np.cos(dpsi))  # wrapped to (-pi, pi]
+        q_raw[:, 0] = wrap_angle(dpsi)  # (-pi, pi]
         q0 = np.minimum(np.maximum(q_raw[:, 0], lo[0]), hi[0])
         c0, s0 = np.cos(q0), np.sin(q0)
         x_yaw = c0 * p_trunk[:, 0] + s0 * p_trunk[:, 1]
@@ -399,7 +395,7 @@ def leg_ik(
     q2 = np.minimum(np.maximum(q2_raw, lo[2]), hi[2])
     # eq. 32: ankle pitch levels the foot (from the clipped hip and knee), wrapped
     q4 = theta - q2 - q3
-    q_raw[:, 4] = np.arctan2(np.sin(q4), np.cos(q4))
+    q_raw[:, 4] = wrap_angle(q4)
 
     q = np.minimum(np.maximum(q_raw, lo), hi)  # (N, 5)
     reachable = (
@@ -505,38 +501,3 @@ def whole_body_ik(
         q[:, robot.leg_joint_index[foot]] = sol.q_rad
         ok &= sol.reachable
     return WholeBodyIKSolution(q, ok)
-
-
-def pin_configuration(
-    robot: RobotModel,
-    p_base_world_m: np.ndarray,
-    rot_base_world: np.ndarray,
-    joint_pos_rad: np.ndarray,
-) -> np.ndarray:
-    """Pinocchio configurations (N, nq) from base poses and actuated joint angles.
-
-    Humanoid: ``[p (3), quat_xyzw (4), joints]``; biped: ``[x, z, pitch, joints]`` with
-    ``pitch = atan2(R[0,2], R[0,0])``.
-
-    Args:
-        robot: the robot.
-        p_base_world_m: (N, 3) trunk positions [m].
-        rot_base_world: (N, 3, 3) trunk rotations.
-        joint_pos_rad: (N, n_joints) actuated joint angles in actuator order [rad].
-    """
-    p_base = np.asarray(p_base_world_m, dtype=float).reshape(-1, 3)
-    rot = np.asarray(rot_base_world, dtype=float).reshape(-1, 3, 3)
-    joints = np.asarray(joint_pos_rad, dtype=float).reshape(-1, robot.n_joints)
-    n = max(p_base.shape[0], rot.shape[0], joints.shape[0])
-    q = np.empty((n, robot.pin_model.nq))
-    q[:, robot.n_root_q :] = joints
-    if robot.spec.planar:
-        q[:, 0] = p_base[:, 0]
-        q[:, 1] = p_base[:, 2]
-        q[:, 2] = np.arctan2(rot[:, 0, 2], rot[:, 0, 0])
-        return q
-    q[:, 0:3] = p_base
-    rots = np.broadcast_to(rot, (n, 3, 3))
-    for k in range(n):
-        q[k, 3:7] = pin.Quaternion(rots[k]).coeffs()  # (x, y, z, w)
-    return q

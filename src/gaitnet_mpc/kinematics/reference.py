@@ -23,19 +23,11 @@ Stage boundary ``k`` lies at ``t_k = sum(dts_s[:k])`` seconds from now (``t_0 = 
   under the feet standing in stage 0 (foot-centre height minus the foot contact radius).
 * Trunk: ``R = R_z(psi(t)) R_y(trunk_pitch_rad)`` (upright, roll = 0); its position is
   solved so that the CoM of the whole configuration lands on the CoM path (below).
-* Feet: each foot's contact column is split into stance and swing segments. A foot stands
-  on foothold ``F_j`` during a stance segment; the ``j``-th swing goes from ``F_j`` to
-  ``F_{j+1}``. ``F_0`` is the foot's current position (or, for a foot swinging now, its
-  lift-off point), ``F_1, F_2, ...`` the planned touchdown targets. The swing path is the
-  obstacle-free :class:`gaitnet_mpc.gait.SwingTrajectory` (minimum-jerk quintic in x-y, apex
-  ``max(z_0, z_1) + swing_apex_height_m`` at mid-swing, zero touchdown speed), evaluated in
-  closed form and vectorised by :func:`swing_profile` (the same curve to 1e-12 m, see the
-  tests; building one ``SwingTrajectory`` object alone costs ~0.5 ms). The current swing
-  runs over the whole current step, from ``-time_in_step_s`` to its touchdown; later
-  swings over their step (``h' dt``). Missing targets fall back to a neutral point
-  (:func:`make_reference`).
-  Foot headings: a standing foot keeps its heading, a new foothold gets the trunk heading
-  at touchdown, a swinging foot blends the two with the same minimum-jerk phase.
+* Feet: stance and swing segments of each foot's contact column, footholds ``F_0, F_1,
+  ...`` and the obstacle-free minimum-jerk swing between them (apex ``max(z_0, z_1) +
+  swing_apex_height_m`` at mid-swing, zero touchdown speed), evaluated in closed form by
+  :func:`gaitnet_mpc.gait.swing.swing_profile`; see :mod:`gaitnet_mpc.kinematics.foot_plan`.
+  Missing targets fall back to a neutral point (:func:`make_reference`).
 * Legs: analytic IK (:func:`gaitnet_mpc.kinematics.whole_body_ik`, Appendix B); arms at
   the nominal pose. An out-of-reach target keeps its value in ``p_foot_ref``, the IK
   returns the nearest feasible leg pose and ``reachable`` is False at that stage.
@@ -55,12 +47,12 @@ Velocities, momenta and the centroidal pose
 
 ``v_ref`` is the derivative of the configuration path along the stage times by
 second-order finite differences on the (non-uniform) grid ``t_k`` (three-point, one-sided
-at the ends, as ``numpy.gradient(edge_order=2)``; :attr:`ReferenceTiming.derivative_matrix`):
-joint rates directly, the trunk's linear velocity as ``R^T dp_B/dt`` and its angular
-velocity as ``R^T e_z dpsi/dt`` (Pinocchio's local free-flyer velocity; the biped's root
-is Euclidean, ``v = dq/dt``). Then ``h_ref[k] = A_G(q_ref[k]) v_ref[k]`` (eq. 11,
-``pin.computeCentroidalMomentum``; ``[linear [kg m/s]; angular about the CoM
-[kg m^2/s]]``, world axes).
+at the ends, as ``numpy.gradient(edge_order=2)``; ``derivative_matrix`` of
+:class:`gaitnet_mpc.gait.timing.ReferenceTiming`): joint rates directly, the trunk's
+linear velocity as ``R^T dp_B/dt`` and its angular velocity as ``R^T e_z dpsi/dt``
+(Pinocchio's local free-flyer velocity; the biped's root is Euclidean, ``v = dq/dt``).
+Then ``h_ref[k] = A_G(q_ref[k]) v_ref[k]`` (eq. 11, ``pin.computeCentroidalMomentum``;
+``[linear [kg m/s]; angular about the CoM [kg m^2/s]]``, world axes).
 
 Centroidal pose ``H_ref`` (``[linear [kg m]; angular [kg m^2]]``), ``pose_method``:
 
@@ -91,16 +83,26 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import Literal, Protocol
+from typing import Literal, cast
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.schedule import GaitHorizon
+from gaitnet_mpc.gait.timing import ReferenceTiming
+from gaitnet_mpc.geometry import wrap_angle
 from gaitnet_mpc.kinematics.centroidal import centroidal_pose_eq30, centroidal_pose_riemann
+from gaitnet_mpc.kinematics.foot_plan import (
+    FootPlan,
+    foot_plan,
+    foot_timeline,
+    footholds_from_iterates,
+    heading_displacement,
+    neutral_foothold,
+)
 from gaitnet_mpc.kinematics.leg_ik import (
     LegGeometry,
     PlanarLegGeometry,
@@ -116,7 +118,6 @@ __all__ = [
     "ReferenceTiming",
     "ReferenceWorkspace",
     "make_reference",
-    "swing_profile",
     "update_reference",
 ]
 
@@ -169,175 +170,6 @@ def _is_number(value: object) -> bool:
 
 def _positive(value: object) -> bool:
     return _is_number(value) and math.isfinite(value) and value > 0.0  # type: ignore[arg-type]
-
-
-@dataclass(frozen=True, eq=False)
-class ReferenceTiming:
-    """Stage timing and contact sequence of the horizon, as the reference needs it.
-
-    Attributes:
-        dts_s: (h,) duration of each stage from *now* [s]; stage 0 may be the unelapsed
-            part of the current stage (see :meth:`from_horizon`). Boundary ``k`` lies at
-            ``t_k = sum(dts_s[:k])``.
-        contact: (h, 2) bool stance mask per stage, columns in ``FEET`` order.
-        time_in_step_s: time since the current step began [s]; a foot swinging in stage 0
-            lifted off this long ago.
-        stages_per_step: ``h'`` [-]; a swing that runs past the horizon end lasts
-            ``h' * full_dts_s[first stage of the swing]``.
-        full_dts_s: (h,) full stage lengths [s] (differs from ``dts_s`` only in a partial
-            stage 0); None: ``dts_s``.
-    """
-
-    dts_s: np.ndarray
-    contact: np.ndarray
-    time_in_step_s: float = 0.0
-    stages_per_step: int = 5
-    full_dts_s: np.ndarray | None = None
-
-    def __post_init__(self) -> None:
-        dts = np.array(self.dts_s, dtype=float).reshape(-1)
-        if dts.size == 0 or not np.all(np.isfinite(dts)) or np.any(dts <= 0.0):
-            raise ConfigError("dts_s", self.dts_s, "(h,) finite stage durations > 0 s, h >= 1")
-        contact = np.array(self.contact, dtype=bool)
-        if contact.shape != (dts.size, _N_FEET):
-            raise ConfigError("contact", self.contact, f"a ({dts.size}, {_N_FEET}) bool mask")
-        t_in = self.time_in_step_s
-        if not (_is_number(t_in) and math.isfinite(t_in) and t_in >= 0.0):
-            raise ConfigError("time_in_step_s", t_in, "a finite time >= 0 s")
-        n = self.stages_per_step
-        if not isinstance(n, int | np.integer) or isinstance(n, bool) or n < 1:
-            raise ConfigError("stages_per_step", n, "an integer >= 1")
-        full = dts if self.full_dts_s is None else np.array(self.full_dts_s, dtype=float)
-        if full.shape != dts.shape or not np.all(np.isfinite(full)) or np.any(full <= 0.0):
-            raise ConfigError("full_dts_s", self.full_dts_s, f"({dts.size},) durations > 0 s")
-        for name, arr in (("dts_s", dts), ("contact", contact), ("full_dts_s", full)):
-            arr.flags.writeable = False
-            object.__setattr__(self, name, arr)
-        object.__setattr__(self, "time_in_step_s", float(t_in))
-        object.__setattr__(self, "stages_per_step", int(n))
-
-    @property
-    def horizon(self) -> int:
-        """Number of stages ``h``."""
-        return int(self.dts_s.size)
-
-    @property
-    def stage_lengths_s(self) -> np.ndarray:
-        """(h,) full stage lengths [s]: ``full_dts_s`` (never None after construction)."""
-        assert self.full_dts_s is not None
-        return self.full_dts_s
-
-    @cached_property
-    def times_s(self) -> np.ndarray:
-        """(h+1,) stage boundary times from now [s], ``t_0 = 0`` (read-only)."""
-        t = np.concatenate([[0.0], np.cumsum(self.dts_s)])
-        t.flags.writeable = False
-        return t
-
-    @cached_property
-    def derivative_matrix(self) -> np.ndarray:
-        """(h+1, h+1) finite-difference matrix ``D`` on the boundary times: ``D @ x`` is
-        ``numpy.gradient(x, times_s, axis=0, edge_order=2)`` (three-point, second order on
-        the non-uniform grid; two-point for ``h = 1``)."""
-        d = _derivative_matrix(self.times_s)
-        d.flags.writeable = False
-        return d
-
-    def with_dts(self, dts_s: ArrayLike) -> ReferenceTiming:
-        """Same contact sequence with new stage durations (e.g. a Gait-Net dt, Alg. 1 l. 8).
-
-        The full stage lengths follow the new ``dts_s`` except for a partial stage 0,
-        whose full length is scaled with it.
-        """
-        dts = np.array(dts_s, dtype=float).reshape(-1)
-        if dts.shape != self.dts_s.shape or not (np.all(np.isfinite(dts)) and dts.min() > 0.0):
-            raise ConfigError("dts_s", dts_s, f"({self.horizon},) finite durations > 0 s")
-        full = dts.copy()
-        full[0] = dts[0] * float(self.stage_lengths_s[0] / self.dts_s[0])
-        dts.flags.writeable = full.flags.writeable = False
-        # the other fields were validated already: skip __post_init__ (runs in the f_IK loop)
-        new = object.__new__(ReferenceTiming)
-        for name, value in (
-            ("dts_s", dts),
-            ("contact", self.contact),
-            ("time_in_step_s", self.time_in_step_s),
-            ("stages_per_step", self.stages_per_step),
-            ("full_dts_s", full),
-        ):
-            object.__setattr__(new, name, value)
-        if np.array_equal(dts, self.dts_s):  # the same durations (every f_IK call of a
-            # sequential solve): share the read-only boundary times and D, functions of
-            # dts_s alone, instead of recomputing them (cached_property reads __dict__)
-            new.__dict__["times_s"] = self.times_s
-            new.__dict__["derivative_matrix"] = self.derivative_matrix
-        return new
-
-    @classmethod
-    def from_horizon(
-        cls,
-        horizon: GaitHorizon,
-        stages_per_step: int = 5,
-        partial_first_stage: bool = True,
-        min_first_stage_s: float = 1e-3,
-    ) -> ReferenceTiming:
-        """Timing from a :class:`gaitnet_mpc.gait.GaitHorizon` snapshot.
-
-        Args:
-            horizon: the schedule's snapshot.
-            stages_per_step: ``h'`` of the schedule (``GaitScheduleConfig.stages_per_step``).
-            partial_first_stage: True: boundary 0 is *now* and stage 0 lasts
-                ``max(first_stage_remaining_s, min_first_stage_s)``; False: boundary 0 is
-                the start of the current stage and every stage has its full length.
-            min_first_stage_s: lower bound of a partial stage 0 [s].
-        """
-        full = np.array(horizon.dts_s, dtype=float)
-        dt0 = float(full[0])
-        stage_start_in_step = float(horizon.stage_in_step[0]) * dt0
-        dts = full.copy()
-        if partial_first_stage:
-            remaining = float(horizon.first_stage_remaining_s)
-            dts[0] = max(remaining, min_first_stage_s)
-            t_in = stage_start_in_step + max(dt0 - remaining, 0.0)
-        else:
-            t_in = stage_start_in_step
-        return cls(
-            dts_s=dts,
-            contact=np.array(horizon.contact, dtype=bool),
-            time_in_step_s=t_in,
-            stages_per_step=stages_per_step,
-            full_dts_s=full,
-        )
-
-
-def _derivative_matrix(times_s: np.ndarray) -> np.ndarray:
-    """(n, n) matrix of ``numpy.gradient(., times_s, edge_order=2)`` (see there)."""
-    n = times_s.size
-    d = np.zeros((n, n))
-    if n == 1:
-        return d
-    if n == 2:
-        w = 1.0 / (times_s[1] - times_s[0])
-        d[:, 0], d[:, 1] = -w, w
-        return d
-    h = np.diff(times_s)  # (n-1,)
-    h1, h2 = h[:-1], h[1:]  # spacing before / after each interior point
-    k = np.arange(1, n - 1)
-    d[k, k - 1] = -h2 / (h1 * (h1 + h2))
-    d[k, k] = (h2 - h1) / (h1 * h2)
-    d[k, k + 1] = h1 / (h2 * (h1 + h2))
-    a, b = h[0], h[1]  # first point: one-sided, second order
-    d[0, :3] = [-(2.0 * a + b) / (a * (a + b)), (a + b) / (a * b), -a / (b * (a + b))]
-    a, b = h[-1], h[-2]  # last point
-    d[-1, -3:] = [a / (b * (a + b)), -(a + b) / (a * b), (2.0 * a + b) / (a * (a + b))]
-    return d
-
-
-class CommandLike(Protocol):
-    """Anything with the fields of :class:`gaitnet_mpc.runner.episode.Command`."""
-
-    vx_mps: float
-    vy_mps: float
-    yaw_rate_radps: float
 
 
 # --------------------------------------------------------------------------- workspace
@@ -492,46 +324,6 @@ class CentroidalReference:
         return bool(np.all(self.reachable))
 
 
-# ----------------------------------------------------------------------- swing profile
-def _min_jerk(s: np.ndarray) -> np.ndarray:
-    """Minimum-jerk blend ``10 s^3 - 15 s^4 + 6 s^5`` (zero rate/acceleration at 0 and 1)."""
-    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
-
-
-def swing_profile(
-    p0_m: np.ndarray, p1_m: np.ndarray, phase: np.ndarray, apex_height_m: float
-) -> np.ndarray:
-    """Obstacle-free swing path of :class:`gaitnet_mpc.gait.SwingTrajectory`, vectorised.
-
-    x-y: ``p0 + (p1 - p0) sigma(s)``; z: rise from ``z0`` to the apex
-    ``max(z0, z1) + apex_height_m`` over ``s`` in [0, 1/2] and descent to ``z1`` over
-    [1/2, 1], each ``sigma``-shaped (zero touchdown speed), ``sigma`` the minimum-jerk
-    blend. ``s = 0`` gives ``p0`` exactly and ``s = 1`` gives ``p1`` up to rounding (the
-    reference stores a landed foot as ``s = 0`` on its new foothold, so stance positions
-    are exact).
-
-    Args:
-        p0_m: (N, 3) lift-off points [m].
-        p1_m: (N, 3) touchdown points [m].
-        phase: (N,) normalised swing time ``s = t / T`` in [0, 1].
-        apex_height_m: apex above ``max(z0, z1)`` [m].
-
-    Returns:
-        (N, 3) foot positions [m].
-    """
-    s = np.clip(phase, 0.0, 1.0)
-    out = p0_m + (p1_m - p0_m) * _min_jerk(s)[:, None]
-    z0, z1 = p0_m[:, 2], p1_m[:, 2]
-    apex = np.maximum(z0, z1) + apex_height_m
-    rise = s < 0.5
-    out[:, 2] = np.where(
-        rise,
-        z0 + (apex - z0) * _min_jerk(np.minimum(2.0 * s, 1.0)),
-        apex + (z1 - apex) * _min_jerk(np.maximum(2.0 * s - 1.0, 0.0)),
-    )
-    return out
-
-
 # ------------------------------------------------------------------- kinematic helpers
 def _rotations(yaw_rad: np.ndarray, pitch_rad: float) -> np.ndarray:
     """(N, 3, 3) ``R_z(yaw) R_y(pitch)``."""
@@ -553,7 +345,7 @@ def _configurations(
 ) -> np.ndarray:
     """(N, nq) Pinocchio configurations for trunk ``R_z(yaw) R_y(pitch)`` at ``p_base_m``.
 
-    Vectorised :func:`gaitnet_mpc.kinematics.pin_configuration`: the quaternion of
+    Humanoid ``[p, quat_xyzw, joints]``, biped ``[x, z, pitch, joints]``; the quaternion of
     ``R_z(psi) R_y(theta)`` is ``(x, y, z, w) = (-s_psi s_th, c_psi s_th, s_psi c_th,
     c_psi c_th)`` with half-angle sines/cosines.
     """
@@ -571,137 +363,10 @@ def _configurations(
     return q
 
 
-def _heading_displacement(
-    v_xy_mps: np.ndarray, yaw0_rad: float, yaw_rate_radps: float, t_s: np.ndarray
-) -> np.ndarray:
-    """(N, 2) ``int_0^t R_z(yaw0 + omega s) v ds``: the chord ``R_z(yaw0 + omega t/2) v t
-    sinc(omega t / 2)`` of the commanded arc (exact for constant v, omega)."""
-    half = 0.5 * yaw_rate_radps * t_s
-    mid = yaw0_rad + half
-    scale = t_s * np.sinc(half / np.pi)  # np.sinc(x) = sin(pi x) / (pi x)
-    c, s = np.cos(mid), np.sin(mid)
-    vx, vy = v_xy_mps
-    return np.stack([(c * vx - s * vy) * scale, (s * vx + c * vy) * scale], axis=1)
-
-
-def _wrap(angle_rad: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(angle_rad), np.cos(angle_rad))
-
-
-# ----------------------------------------------------------------------- foot timeline
-@dataclass(frozen=True)
-class _Swing:
-    """One swing of one foot inside the horizon (times relative to now)."""
-
-    first_stage: int
-    t_liftoff_s: float
-    t_touchdown_s: float
-
-
-@dataclass(frozen=True)
-class _FootTimeline:
-    """Per-boundary foothold index and swing phase of one foot, and its swings."""
-
-    index: np.ndarray  # (h+1,) int
-    phase: np.ndarray  # (h+1,) float in [0, 1]
-    swings: tuple[_Swing, ...]
-
-
-@dataclass(frozen=True)
-class _FootPlan:
-    """Foot targets over the horizon and the foothold data behind them."""
-
-    p_foot_m: np.ndarray  # (h+1, 2, 3) foot-centre targets
-    foot_yaw_rad: np.ndarray  # (h+1, 2) foot headings
-    footholds_m: dict[str, np.ndarray]  # foot -> (n_f, 3)
-    foothold_yaw_rad: dict[str, np.ndarray]  # foot -> (n_f,)
-    index: np.ndarray  # (h+1, 2) int foothold F_j
-    phase: np.ndarray  # (h+1, 2) swing phase from F_j to F_{j+1}
-    time_in_swing_s: np.ndarray  # (2,)
-
-
-def _foot_timeline(
-    timing: ReferenceTiming, foot_col: int, times_s: np.ndarray, time_in_swing_s: float
-) -> _FootTimeline:
-    """Split one contact column into stance / swing segments (see module docstring).
-
-    ``time_in_swing_s``: how long ago a foot swinging in stage 0 lifted off [s]. Plain
-    Python over the ``h + 1`` boundaries: cheaper than NumPy at these sizes.
-    """
-    c = timing.contact[:, foot_col].tolist()  # (h,)
-    t = times_s.tolist()  # (h+1,)
-    h = len(c)
-    index = [0] * (h + 1)
-    phase = [0.0] * (h + 1)
-    swings: list[_Swing] = []
-    j = 0
-    a = 0
-    while a < h:
-        b = a + 1
-        while b < h and c[b] == c[a]:
-            b += 1  # stages a..b-1 form one segment, boundaries a..b
-        if c[a]:  # stance on F_j (also at the touchdown boundary a)
-            index[a : b + 1] = [j] * (b + 1 - a)
-            phase[a : b + 1] = [0.0] * (b + 1 - a)
-        else:  # swing from F_j to F_{j+1}
-            t_lo = -time_in_swing_s if a == 0 else t[a]
-            if b < h:
-                t_td = t[b]
-            else:  # lands after the horizon: the swing lasts one step (h' dt)
-                t_step = timing.stages_per_step * float(timing.stage_lengths_s[a])
-                t_td = max(t_lo + t_step, t[h])
-            duration = max(t_td - t_lo, 1e-12)
-            for k in range(a, b + 1):
-                index[k] = j
-                phase[k] = min(max((t[k] - t_lo) / duration, 0.0), 1.0)
-            swings.append(_Swing(a, t_lo, t_td))
-            j += 1
-        a = b
-    return _FootTimeline(np.array(index), np.array(phase), tuple(swings))
-
-
-def _stacked_index(
-    index: np.ndarray, footholds: dict[str, np.ndarray]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Footholds of both feet stacked (n_l + n_r, 3), and per boundary the stacked row of
-    ``F_j`` and of ``F_{j+1}`` (clipped to the foot's last foothold), each (h+1, 2)."""
-    sizes = np.array([footholds[f].shape[0] for f in FEET])
-    offset = np.concatenate([[0], np.cumsum(sizes)[:-1]])  # (2,)
-    stacked = np.concatenate([footholds[f] for f in FEET])
-    j0 = index + offset
-    j1 = np.minimum(j0 + 1, offset + sizes - 1)
-    return stacked, j0, j1
-
-
-def _foot_plan(
-    ws: ReferenceWorkspace,
-    index: np.ndarray,
-    phase: np.ndarray,
-    footholds: dict[str, np.ndarray],
-    foothold_yaw: dict[str, np.ndarray],
-    time_in_swing_s: np.ndarray,
-) -> _FootPlan:
-    """Foot positions (h+1, 2, 3) and headings (h+1, 2) from the timeline (both feet in
-    one vectorised :func:`swing_profile` call)."""
-    stacked, j0, j1 = _stacked_index(index, footholds)  # (n_fh, 3), (h+1, 2) x2
-    n = index.shape[0]
-    apex = ws.config.swing_apex_height_m
-    p_foot = swing_profile(stacked[j0.ravel()], stacked[j1.ravel()], phase.ravel(), apex)
-    if ws.planar:
-        yaw = np.zeros((n, _N_FEET))
-    else:
-        yaws = np.concatenate([foothold_yaw[f] for f in FEET])
-        y0 = yaws[j0]
-        yaw = y0 + _wrap(yaws[j1] - y0) * _min_jerk(phase)
-    return _FootPlan(
-        p_foot.reshape(n, _N_FEET, 3), yaw, footholds, foothold_yaw, index, phase, time_in_swing_s
-    )
-
-
 # -------------------------------------------------------------------- core solve
 def _place_trunk(
     ws: ReferenceWorkspace,
-    plan: _FootPlan,
+    plan: FootPlan,
     p_com_target_m: np.ndarray,
     p_base_guess_m: np.ndarray,
     yaw_rad: np.ndarray,
@@ -715,7 +380,7 @@ def _place_trunk(
     rot = _rotations(yaw_rad, cfg.trunk_pitch_rad)  # (h+1, 3, 3)
     targets = {f: plan.p_foot_m[:, i] for i, f in enumerate(FEET)}
     yaw_targets = None  # None: q0 = 0 (eq. 31), the same when the feet face the trunk heading
-    if not ws.planar and np.max(np.abs(_wrap(plan.foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
+    if not ws.planar and np.max(np.abs(wrap_angle(plan.foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
         yaw_targets = {f: plan.foot_yaw_rad[:, i] for i, f in enumerate(FEET)}
     p_base = p_base_guess_m.copy()
     for it in range(cfg.com_iterations + 1):
@@ -735,7 +400,7 @@ def _place_trunk(
 def _build(
     ws: ReferenceWorkspace,
     timing: ReferenceTiming,
-    plan: _FootPlan,
+    plan: FootPlan,
     p_com_target_m: np.ndarray,
     p_base_guess_m: np.ndarray,
     yaw_rad: np.ndarray,
@@ -798,9 +463,11 @@ def _build(
 
 
 # ----------------------------------------------------------------------- input parsing
-def _command(command: ArrayLike | CommandLike, planar: bool) -> tuple[np.ndarray, float]:
+def _command(command: ArrayLike | Command, planar: bool) -> tuple[np.ndarray, float]:
+    """``(v_xy [m/s], yaw_rate [rad/s])`` from a :class:`Command` (or any object with its
+    three fields, e.g. a controller's ramped command) or a ``(vx, vy, yaw_rate)`` array."""
     if hasattr(command, "vx_mps"):
-        cmd: CommandLike = command  # type: ignore[assignment]
+        cmd = cast(Command, command)  # duck-typed: any object with Command's fields
         vx, vy, wz = cmd.vx_mps, cmd.vy_mps, cmd.yaw_rate_radps
     else:
         c = np.asarray(command, dtype=float).reshape(-1)
@@ -844,38 +511,12 @@ def _workspace(
     return workspace
 
 
-def _neutral_foothold(
-    ws: ReferenceWorkspace,
-    foot: str,
-    p_com_start_m: np.ndarray,
-    v_cmd_mps: np.ndarray,
-    yaw0_rad: float,
-    yaw_rate_radps: float,
-    swing: _Swing,
-    t_step_s: float,
-    previous_m: np.ndarray,
-) -> np.ndarray:
-    """(3,) fallback touchdown target: ``p_c(t_td) + R_z(psi_td) (0, y_nom) + v T / 2`` in
-    x-y (commanded CoM path, Raibert neutral point without feedback), previous height."""
-    t_td = np.array([swing.t_touchdown_s])
-    p_c = p_com_start_m[:2] + _heading_displacement(v_cmd_mps, yaw0_rad, yaw_rate_radps, t_td)[0]
-    yaw_td = yaw0_rad + yaw_rate_radps * swing.t_touchdown_s
-    c, s = math.cos(yaw_td), math.sin(yaw_td)
-    lat = ws.foot_lateral_m[foot]
-    v_world = np.array([c * v_cmd_mps[0] - s * v_cmd_mps[1], s * v_cmd_mps[0] + c * v_cmd_mps[1]])
-    out = previous_m.copy()
-    out[:2] = p_c + np.array([-s * lat, c * lat]) + 0.5 * t_step_s * v_world
-    if ws.planar:
-        out[1] = previous_m[1]
-    return out
-
-
 # ------------------------------------------------------------------------------- f_ref
 def make_reference(
     robot: RobotModel,
     q_now: ArrayLike,
     timing: ReferenceTiming | GaitHorizon,
-    command: ArrayLike | CommandLike,
+    command: ArrayLike | Command,
     footholds: Mapping[str, ArrayLike] | None = None,
     *,
     p_foot_now_m: Mapping[str, ArrayLike] | None = None,
@@ -906,8 +547,8 @@ def make_reference(
             :class:`gaitnet_mpc.gait.GaitHorizon` is converted with
             ``ReferenceTiming.from_horizon(timing)`` (``h' = 5``, boundary 0 = now).
         command: ``(vx [m/s], vy [m/s], yaw_rate [rad/s])`` with ``(vx, vy)`` in the heading
-            (yaw) frame, or an object with ``vx_mps, vy_mps, yaw_rate_radps``
-            (:class:`gaitnet_mpc.runner.episode.Command`). The biped uses ``vx`` only.
+            (yaw) frame, or a :class:`gaitnet_mpc.command.Command` (or any object with
+            its fields ``vx_mps, vy_mps, yaw_rate_radps``). The biped uses ``vx`` only.
         footholds: foot -> touchdown targets (n, 3) or (3,) [m] of that foot's upcoming
             swings in the horizon, in order: for the foot swinging now its current target,
             for the standing foot its next foothold, and so on. A missing target is
@@ -966,7 +607,7 @@ def make_reference(
     stance0 = [f for i, f in enumerate(FEET) if timing.contact[0, i]] or list(FEET)
     ground_z = float(np.mean([p_now[f][2] for f in stance0])) - ws.contact_radius_m
     p_com_des = np.empty((n, 3))
-    p_com_des[:, :2] = start[:2] + _heading_displacement(v_cmd, yaw0, yaw_rate, times)
+    p_com_des[:, :2] = start[:2] + heading_displacement(v_cmd, yaw0, yaw_rate, times)
     p_com_des[:, 2] = ground_z + ws.com_height_m
     if ws.planar:
         p_com_des[:, 1] = com_now[1]
@@ -983,7 +624,7 @@ def make_reference(
         if not timing.contact[0, i] and p_liftoff_m is not None and f in p_liftoff_m:
             first = _point(p_liftoff_m[f], f"p_liftoff_m[{f!r}]")
             time_in_swing[i] = timing.time_in_step_s
-        line = _foot_timeline(timing, i, times, float(time_in_swing[i]))
+        line = foot_timeline(timing, i, times, float(time_in_swing[i]))
         index[:, i], phase[:, i] = line.index, line.phase
         given = _targets(footholds, f)
         pts = [first]
@@ -994,13 +635,18 @@ def make_reference(
                 pts.append(given[s_i].copy())
             else:
                 t_step = timing.stages_per_step * float(timing.stage_lengths_s[sw.first_stage])
+                lateral = ws.foot_lateral_m[f]
                 pts.append(
-                    _neutral_foothold(ws, f, start, v_cmd, yaw0, yaw_rate, sw, t_step, pts[-1])
+                    neutral_foothold(
+                        start, v_cmd, yaw0, yaw_rate, sw, t_step, pts[-1], lateral, ws.planar
+                    )
                 )
             yaws.append(yaw_td)
         fh_all[f] = np.array(pts)
         fh_yaw[f] = np.unwrap(np.array(yaws))
-    plan = _foot_plan(ws, index, phase, fh_all, fh_yaw, time_in_swing)
+    plan = foot_plan(
+        index, phase, fh_all, fh_yaw, time_in_swing, ws.config.swing_apex_height_m, ws.planar
+    )
 
     rot = _rotations(yaw, ws.config.trunk_pitch_rad)
     p_base0 = p_com_des - rot @ ws.com_offset_trunk_m  # nominal trunk-to-CoM offset
@@ -1013,42 +659,6 @@ def make_reference(
 
 
 # -------------------------------------------------------------------------------- f_IK
-def _footholds_from_iterates(ref: CentroidalReference, p_iter: np.ndarray) -> dict[str, np.ndarray]:
-    """New footholds: each foothold's mean iterate over the rows where the foot stands on
-    it. Row ``k`` is read iff the foot is in contact in stage ``k`` (row ``h`` of a
-    boundary array: stage ``h - 1``), so a swinging foot's row is never read. Footholds
-    without such a row keep their value; the biped keeps y."""
-    h = ref.horizon
-    contact = ref.timing.contact  # (h, 2)
-    if p_iter.shape == (h + 1, _N_FEET, 3):
-        rows = h + 1
-        on_ground = np.concatenate([contact, contact[-1:]])  # (h+1, 2)
-    elif p_iter.shape == (h, _N_FEET, 3):
-        rows = h
-        on_ground = contact
-    else:
-        raise ConfigError(
-            "p_foot_iter_m", p_iter.shape, f"({h + 1}, 2, 3) or ({h}, 2, 3) foot iterates [m]"
-        )
-    stacked, j0, _ = _stacked_index(ref.foothold_index[:rows], ref.footholds_m)
-    j = (j0 + (ref.swing_phase[:rows] == 1.0))[on_ground]  # (n_on,) stacked foothold rows
-    n_fh = stacked.shape[0]
-    counts = np.bincount(j, minlength=n_fh)  # (n_fh,)
-    onehot = np.zeros((j.size, n_fh))
-    onehot[np.arange(j.size), j] = 1.0
-    sums = onehot.T @ p_iter[on_ground]  # (n_fh, 3)
-    new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], stacked)
-    if ref.workspace.planar:
-        new[:, 1] = stacked[:, 1]
-    out: dict[str, np.ndarray] = {}
-    start = 0
-    for f in FEET:
-        size = ref.footholds_m[f].shape[0]
-        out[f] = new[start : start + size]
-        start += size
-    return out
-
-
 def update_reference(
     robot: RobotModel,
     ref: CentroidalReference,
@@ -1108,7 +718,14 @@ def update_reference(
         p_iter = np.asarray(p_foot_iter_m, dtype=float)
         if not np.all(np.isfinite(p_iter)):
             raise ConfigError("p_foot_iter_m", "non-finite", "finite foot iterates [m]")
-        footholds = _footholds_from_iterates(ref, p_iter)
+        footholds = footholds_from_iterates(
+            p_iter,
+            ref.timing.contact,
+            ref.foothold_index,
+            ref.swing_phase,
+            ref.footholds_m,
+            ws.planar,
+        )
 
     # timing-dependent quantities: swing phases, trunk heading, foothold headings
     if dts_s is None:
@@ -1121,13 +738,21 @@ def update_reference(
         yaw = ref.yaw_ref_rad[0] + ref.yaw_rate_radps * times
         fh_yaw = {}
         for i, f in enumerate(FEET):
-            line = _foot_timeline(timing, i, times, float(ref.time_in_swing_s[i]))
+            line = foot_timeline(timing, i, times, float(ref.time_in_swing_s[i]))
             index[:, i], phase[:, i] = line.index, line.phase
             yaws = ref.foothold_yaw_rad[f].copy()
             for s_i, sw in enumerate(line.swings):
                 yaws[s_i + 1] = yaw[0] + ref.yaw_rate_radps * sw.t_touchdown_s
             fh_yaw[f] = yaws
-    plan = _foot_plan(ws, index, phase, footholds, fh_yaw, ref.time_in_swing_s)
+    plan = foot_plan(
+        index,
+        phase,
+        footholds,
+        fh_yaw,
+        ref.time_in_swing_s,
+        ws.config.swing_apex_height_m,
+        ws.planar,
+    )
 
     # CoM target and the initial trunk guess from the previous trunk-to-CoM offsets
     if p_com_iter_m is None:

@@ -1,31 +1,34 @@
 """Algorithm 1: the sequential convex MPC of the implicit kino-dynamic controller.
 
-One solve::
+One solve of a :class:`KDProblem`::
 
     x_0   = f_j2m(q, v)                                  (line 1)
     ref   = f_ref(q, command, footholds, dt^0)           (lines 2-3)
-    u^0   = references (weight shared by stance feet)    (line 1)
+    u^0   = references (weight shared by stance feet)    (line 4)
     repeat j = 0 .. j_max - 1:                            (line 5)
         du^j   = cmpc(x_ref, p_f_ref, p_c_ref, x_0, dt^j, u^j)     (line 6, eqs. 13-24)
         u^j+1  = u^j + du^j                                         (line 7)
-        dt^j+1 = dt_policy(state, u^j+1)                            (line 8: Gait-Net slot)
+        dt^j+1 = dt_policy(problem, u^j+1, dt^j)                    (line 8: Gait-Net slot)
         ref    = f_IK(p_f^j+1, p_c^j+1, dt^j+1)                     (line 9, Remark 1)
-    until every search direction is below Table X's tolerances.
+    until every search direction is below Table X's tolerances and dt has settled.
 
-The dt policy acts only at a step start (Remark 4); during a step the same dt is kept
-and the loop re-solves footholds and wrenches, warm-started from the previous plan's
-footholds.
+The dt policy acts only where the problem asks for it, at a step start (Remark 4); its dt
+becomes the sampling time of every stage (the paper's single MPC dt; a partial stage 0 is
+scaled with it). During a step the same dt is kept and the loop re-solves footholds and
+wrenches, warm-started from the previous plan's footholds.
 """
 
 from __future__ import annotations
 
+import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
 
+from gaitnet_mpc.command import Command
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import centroidal_map_euler, euler_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
@@ -45,11 +48,78 @@ from gaitnet_mpc.mpc.implicit_kd import (
 from gaitnet_mpc.robots import FEET, RobotModel
 
 
+@dataclass(frozen=True)
+class FootholdBox:
+    """Eq. 24 box of one foot's next touchdown: ``lo_m <= p_f <= hi_m`` (3,) [m] (an
+    infinite entry leaves that axis free)."""
+
+    lo_m: np.ndarray
+    hi_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class CoMReference:
+    """CoM path ``p_m`` and velocity ``v_mps`` (h+1, 3) that replace ``f_ref``'s in eq. 18's
+    CoM term, the linear centroidal pose ``m p_c`` and the linear momentum ``m v_c``; NaN
+    entries keep ``f_ref``'s value."""
+
+    p_m: np.ndarray
+    v_mps: np.ndarray
+
+
+@dataclass(frozen=True)
+class KDProblem:
+    """Everything one solve of Algorithm 1 needs (world frame, Pinocchio coordinates).
+
+    Attributes:
+        q, v: measured configuration and velocity.
+        timing: stage durations ``dt^0`` and contact sequence from now.
+        command: velocity command, already ramped.
+        heading_rad: commanded trunk heading at the start of the horizon [rad]; yaw in the
+            centroidal pose is measured from it.
+        footholds_m: foot -> (n, 3) initial touchdown targets of its swings in the horizon
+            (the warm start ``u^0``; the MPC moves them).
+        p_foot_now_m: foot -> (3,) measured foot centres.
+        p_liftoff_m: foot -> (3,) lift-off point of the foot swinging now.
+        foot_yaw_rad: (h, 2) foot headings for the line-foot wrench limits.
+        foothold_boxes: foot -> eq. 24 box of its next touchdown.
+        p_com_start_m: start of the reference CoM path (None: the measured CoM); a point on
+            the commanded path lets the MPC correct drift.
+        com_reference: function of the timing giving the CoM reference that replaces
+            ``f_ref``'s (e.g. a LIP sway orbit over the footholds); it is called again
+            when the dt changes (line 9). None: ``f_ref``'s.
+        j_max: iteration cap (None: ``SequentialConfig.j_max``).
+        choose_dt: True at a step start: the solver's dt policy sets the stage durations
+            inside the iterations (line 8). False: ``timing`` is kept (Remark 4).
+    """
+
+    q: np.ndarray
+    v: np.ndarray
+    timing: ReferenceTiming
+    command: Command
+    heading_rad: float
+    footholds_m: Mapping[str, np.ndarray]
+    p_foot_now_m: Mapping[str, np.ndarray]
+    p_liftoff_m: Mapping[str, np.ndarray]
+    foot_yaw_rad: np.ndarray
+    foothold_boxes: Mapping[str, FootholdBox] = field(default_factory=dict)
+    p_com_start_m: np.ndarray | None = None
+    com_reference: Callable[[ReferenceTiming], CoMReference | None] | None = None
+    j_max: int | None = None
+    choose_dt: bool = False
+
+
 class DtPolicy(Protocol):
     """Chooses the MPC sampling time of the step that is starting (Alg. 1, line 8)."""
 
-    def __call__(self, q: np.ndarray, v: np.ndarray, iterate: KDIterate, dt_s: float) -> float:
-        """The next dt [s] given the measured state and the current iterate."""
+    @property
+    def nominal_dt_s(self) -> float:
+        """``dt^0`` [s] of the first step, before the policy has seen a plan."""
+        ...
+
+    def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
+        """The next dt [s] given the problem (measured state) and the current iterate
+        (footholds and CoM path of ``u^{j+1}``), whose stages last ``dt_s``."""
         ...
 
 
@@ -59,7 +129,11 @@ class FixedDt:
 
     dt_s: float = 0.045
 
-    def __call__(self, q: np.ndarray, v: np.ndarray, iterate: KDIterate, dt_s: float) -> float:
+    @property
+    def nominal_dt_s(self) -> float:
+        return self.dt_s
+
+    def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
         return self.dt_s
 
 
@@ -80,6 +154,10 @@ class SequentialConfig:
     # so it stays off.
     relax_after_qps: int | None = None
     relax_step: float = 0.5
+    # The dt policy's output is clipped into these bounds [s] (GaitScheduleConfig's), and a
+    # change smaller than ``dt_tolerance_s`` is not applied (the references stay as they are).
+    dt_bounds_s: tuple[float, float] = (0.03, 0.2)
+    dt_tolerance_s: float = 1e-4
 
     def __post_init__(self) -> None:
         if not isinstance(self.j_max, int) or self.j_max < 1:
@@ -89,6 +167,11 @@ class SequentialConfig:
             raise ConfigError("relax_after_qps", n, "None or an integer >= 1")
         if not 0.0 < self.relax_step <= 1.0:
             raise ConfigError("relax_step", self.relax_step, "a step fraction in (0, 1]")
+        lo, hi = self.dt_bounds_s
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo <= hi):
+            raise ConfigError("dt_bounds_s", self.dt_bounds_s, "(min, max) with 0 < min <= max [s]")
+        if not (math.isfinite(self.dt_tolerance_s) and self.dt_tolerance_s >= 0.0):
+            raise ConfigError("dt_tolerance_s", self.dt_tolerance_s, "a finite time >= 0 s")
 
 
 @dataclass
@@ -103,6 +186,7 @@ class SequentialResult:
     converged: bool
     solve_time_s: float
     last_step: KDStep | None
+    step_dt_s: float  # the step's MPC dt the plan was made with (the policy's) [s]
     t_plan_s: float = 0.0
 
     def stage_at(self, t_s: float) -> int:
@@ -148,121 +232,117 @@ def angular_pose_kgm2(
     """
     xi = euler_coordinates(robot.pin_model, q)
     if not robot.spec.planar:
+        # wrapped as (a + pi) mod 2 pi - pi, not geometry.wrap_angle: the atan2 form differs in
+        # the last bit and changes the closed-loop logs (measured)
         xi[5] = (xi[5] - yaw_origin_rad + np.pi) % (2 * np.pi) - np.pi
     return (centroidal_map_euler(robot.pin_model, data, q) @ xi)[3:]
 
 
 class SequentialKDMPC:
-    """The implicit kino-dynamic MPC solved by sequential convex QPs (Algorithm 1)."""
+    """The implicit kino-dynamic MPC solved by sequential convex QPs (Algorithm 1).
 
-    def __init__(self, robot: RobotModel, config: SequentialConfig | None = None) -> None:
+    ``dt_policy`` (default :class:`FixedDt`) is consulted inside the iterations of a
+    problem with ``choose_dt`` (line 8).
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        config: SequentialConfig | None = None,
+        dt_policy: DtPolicy | None = None,
+    ) -> None:
         self.robot = robot
         self.config = config or SequentialConfig()
+        self.dt_policy: DtPolicy = dt_policy or FixedDt()
         self.subproblem = KDSubproblem(self.config.kd)
         self.ref_workspace = ReferenceWorkspace(robot)
         self.pin_data = robot.pin_model.createData()
 
-    def _yaw_origin(self, q: np.ndarray, command: object) -> float:
-        """Commanded heading at the start of the horizon [rad] (the controller's reference)."""
-        return float(getattr(command, "heading_rad", 0.0))
-
-    def solve(
-        self,
-        q: np.ndarray,
-        v: np.ndarray,
-        timing: ReferenceTiming,
-        command: object,
-        footholds: Mapping[str, np.ndarray],
-        p_foot_now_m: Mapping[str, np.ndarray],
-        p_liftoff_m: Mapping[str, np.ndarray],
-        foot_yaw_rad: np.ndarray,
-        foothold_bounds: Mapping[str, tuple[np.ndarray, np.ndarray, None]] | None = None,
-        j_max: int | None = None,
-        p_com_start_m: np.ndarray | None = None,
-        com_reference: tuple[np.ndarray, np.ndarray] | None = None,
-    ) -> SequentialResult:
-        """Run Algorithm 1 from the measured state (q, v) in Pinocchio coordinates.
-
-        Args:
-            timing: stage durations and contact sequence from now.
-            command: velocity command (``vx_mps``, ``vy_mps``, ``yaw_rate_radps``).
-            footholds: foot -> initial touchdown targets (n, 3) of its swings in the
-                horizon (the warm start ``u^0``; the MPC moves them).
-            p_foot_now_m: foot -> (3,) measured foot centres.
-            p_liftoff_m: foot -> (3,) lift-off point of the foot swinging now.
-            foot_yaw_rad: (h, 2) foot headings for the line-foot wrench limits.
-            foothold_bounds: eq. 24 boxes for the next touchdown (one-step preview).
-            j_max: iteration cap (default ``config.j_max``).
-            p_com_start_m: start of the reference CoM path (default: the measured CoM);
-                a point on the commanded path lets the MPC correct drift.
-            com_reference: optional ``(p_com (h+1, 3) [m], v_com (h+1, 3) [m/s])`` that
-                replaces the CoM path of ``f_ref`` in eq. 18's CoM term, the linear
-                centroidal pose ``m p_c`` and the linear momentum ``m v_c`` (with
-                ``linear_reference_from_command``), e.g. a LIP sway orbit over the
-                planned footholds (the straight command line with ``l_y = 0`` is only
-                reachable with the feet under the CoM, as the line foot has no roll
-                moment). NaN entries keep ``f_ref``'s value.
-        """
-        t0 = time.perf_counter()
-        cfg = self.config
+    def _references(
+        self, problem: KDProblem, timing: ReferenceTiming, footholds: Mapping[str, np.ndarray]
+    ) -> _References:
+        """``f_ref`` on ``timing`` (lines 2-3) with the problem's CoM override applied."""
         robot = self.robot
         mass = robot.total_mass_kg
-        # Centroidal pose: measured H_0 and the reference's H_0 from the same map (eq. 30),
-        # with yaw measured from the commanded heading at the start of the horizon.
-        yaw_cmd = self._yaw_origin(q, command)
-        pose0_meas = angular_pose_kgm2(robot, self.pin_data, q, yaw_cmd)
         ref = make_reference(
             robot,
-            q,
+            problem.q,
             timing,
-            command,
+            problem.command,
             footholds,
-            p_foot_now_m=p_foot_now_m,
-            p_liftoff_m=p_liftoff_m,
-            p_com_start_m=p_com_start_m,
+            p_foot_now_m=problem.p_foot_now_m,
+            p_liftoff_m=problem.p_liftoff_m,
+            p_com_start_m=problem.p_com_start_m,
             workspace=self.ref_workspace,
         )
         # The reference's angular pose starts at 0; H_ref's angular part is additive in its
         # start value (eq. 30 and the Riemann sum alike), so shift it to the same map of
         # q_ref[0] instead of building the reference a second time.
-        pose0_ref = angular_pose_kgm2(robot, self.pin_data, ref.q_ref[0], yaw_cmd)
+        pose0_ref = angular_pose_kgm2(robot, self.pin_data, ref.q_ref[0], problem.heading_rad)
         H_ref = ref.H_ref.copy()
         H_ref[:, 3:] += pose0_ref - ref.pose0_angular_kgm2
         ref = replace(ref, H_ref=H_ref, pose0_angular_kgm2=pose0_ref)
+        p_com_ref = ref.p_com_ref  # f_ref's CoM path; line 9 updates x_ref and p_f_ref only
+        h_lin_ref, pose_lin_ref = ref.h_ref[:, :3].copy(), ref.H_ref[:, :3].copy()
+        h_ref, pose_ref = ref.h_ref, ref.H_ref
+        com = problem.com_reference(timing) if problem.com_reference is not None else None
+        if com is not None:
+            pc, vc = np.asarray(com.p_m, dtype=float), np.asarray(com.v_mps, dtype=float)
+            p_com_ref = np.where(np.isnan(pc), p_com_ref, pc)
+            pose_lin_ref = np.where(np.isnan(pc), pose_lin_ref, mass * pc)
+            h_lin_ref = np.where(np.isnan(vc), h_lin_ref, mass * vc)
+            h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
+            pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
+        return _References(
+            ref, h_ref, pose_ref, p_com_ref, h_lin_ref, pose_lin_ref, com is not None
+        )
+
+    def _next_dt(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
+        """Line 8: the policy's dt for the step, clipped into ``dt_bounds_s`` [s]."""
+        lo, hi = self.config.dt_bounds_s
+        dt = float(self.dt_policy(problem, iterate, dt_s))
+        if not math.isfinite(dt):
+            raise ConfigError("dt_policy output", dt, f"a sampling time in [{lo}, {hi}] s")
+        return min(max(dt, lo), hi)
+
+    def solve(self, problem: KDProblem) -> SequentialResult:
+        """Run Algorithm 1 on ``problem`` from its measured state."""
+        t0 = time.perf_counter()
+        cfg = self.config
+        robot = self.robot
+        mass = robot.total_mass_kg
+        q, v = problem.q, problem.v
+        # Centroidal pose: measured H_0 and the reference's H_0 from the same map (eq. 30),
+        # with yaw measured from the commanded heading at the start of the horizon.
+        pose0_meas = angular_pose_kgm2(robot, self.pin_data, q, problem.heading_rad)
+        timing = problem.timing
+        r = self._references(problem, timing, problem.footholds_m)
         h0 = f_j2m(robot.pin_model, self.pin_data, q, v)
         com0 = np.array(self.pin_data.com[0])
         x0 = np.concatenate([mass * com0, pose0_meas, h0])
         contact = np.asarray(timing.contact, dtype=bool)
         dts = np.asarray(timing.dts_s, dtype=float)
-        p_measured = np.stack([np.asarray(p_foot_now_m[f], dtype=float) for f in FEET])
-        pf_ref = mpc_foot_reference(ref, contact)
-        p_com_ref = ref.p_com_ref  # f_ref's CoM path; line 9 updates x_ref and p_f_ref only
-        h_lin_ref, pose_lin_ref = ref.h_ref[:, :3].copy(), ref.H_ref[:, :3].copy()
-        h_ref, pose_ref = ref.h_ref, ref.H_ref
-        if com_reference is not None:
-            pc_override = np.asarray(com_reference[0], dtype=float)
-            vc_override = np.asarray(com_reference[1], dtype=float)
-            p_com_ref = np.where(np.isnan(pc_override), p_com_ref, pc_override)
-            pose_lin_ref = np.where(np.isnan(pc_override), pose_lin_ref, mass * pc_override)
-            h_lin_ref = np.where(np.isnan(vc_override), h_lin_ref, mass * vc_override)
-            h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
-            pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
-        iterate = KDIterate.initial(com0, p_com_ref, pf_ref, contact, mass)
+        dt = float(timing.stage_lengths_s[0])  # the step's dt^j (full stage 0)
+        p_measured = np.stack([np.asarray(problem.p_foot_now_m[f], dtype=float) for f in FEET])
+        boxes = {f: (b.lo_m, b.hi_m, None) for f, b in problem.foothold_boxes.items()}
+        pf_ref = mpc_foot_reference(r.ref, contact)
+        h_ref, pose_ref = r.h_ref, r.pose_ref
+        iterate = KDIterate.initial(com0, r.p_com_ref, pf_ref, contact, mass)
         step: KDStep | None = None
         converged = False
         n_qps = 0
-        for _ in range(j_max or cfg.j_max):
+        for _ in range(problem.j_max or cfg.j_max):
             step = self.subproblem.solve(
                 x0,
                 iterate,
                 h_ref,
                 pose_ref,
                 pf_ref,
-                p_com_ref,
+                r.p_com_ref,
                 dts,
                 contact,
-                foot_yaw_rad,
-                foothold_bounds,
+                problem.foot_yaw_rad,
+                boxes or None,
                 p_measured,
             )
             n_qps += 1
@@ -270,23 +350,57 @@ class SequentialKDMPC:
             if cfg.relax_after_qps is not None and n_qps > cfg.relax_after_qps:
                 alpha = cfg.relax_step
             iterate = iterate.apply(step, alpha)
-            if step.converged(cfg.tolerances):
+            retimed = False
+            if problem.choose_dt:
+                dt_new = self._next_dt(problem, iterate, dt)
+                if abs(dt_new - dt) > cfg.dt_tolerance_s:
+                    timing = timing.with_dts(dts * (dt_new / dt))
+                    dts = np.asarray(timing.dts_s, dtype=float)
+                    dt, retimed = dt_new, True
+                    touchdowns = _touchdowns(iterate, contact)
+                    r = self._references(problem, timing, touchdowns)
+            if step.converged(cfg.tolerances) and not retimed:
                 converged = True
                 break
-            ref = update_reference(robot, ref, iterate.p_foot, iterate.p_com, dts)
+            ref = update_reference(robot, r.ref, iterate.p_foot, iterate.p_com, dts)
+            r = replace(r, ref=ref)
             h_ref, pose_ref = ref.h_ref, ref.H_ref
-            if cfg.linear_reference_from_command or com_reference is not None:
-                h_ref = np.hstack([h_lin_ref, ref.h_ref[:, 3:]])
-                pose_ref = np.hstack([pose_lin_ref, ref.H_ref[:, 3:]])
+            if cfg.linear_reference_from_command or r.com_override:
+                h_ref = np.hstack([r.h_lin_ref, ref.h_ref[:, 3:]])
+                pose_ref = np.hstack([r.pose_lin_ref, ref.H_ref[:, 3:]])
             if cfg.update_foot_reference:
                 pf_ref = mpc_foot_reference(ref, contact)
         return SequentialResult(
             iterate=iterate,
-            reference=ref,
+            reference=r.ref,
             dts_s=dts,
             contact=contact,
             n_qps=n_qps,
             converged=converged,
             solve_time_s=time.perf_counter() - t0,
             last_step=step,
+            step_dt_s=dt,
         )
+
+
+@dataclass(frozen=True)
+class _References:
+    """The references of one timing: ``f_ref`` / ``f_IK`` output and what eq. 18 tracks."""
+
+    ref: CentroidalReference
+    h_ref: np.ndarray  # (h+1, 6) momentum reference
+    pose_ref: np.ndarray  # (h+1, 6) centroidal-pose reference
+    p_com_ref: np.ndarray  # (h+1, 3) CoM reference [m]
+    h_lin_ref: np.ndarray  # (h+1, 3) linear momentum of f_ref (or the CoM override)
+    pose_lin_ref: np.ndarray  # (h+1, 3) m p_c of f_ref (or the CoM override)
+    com_override: bool
+
+
+def _touchdowns(iterate: KDIterate, contact: np.ndarray) -> dict[str, np.ndarray]:
+    """foot -> (n, 3) the iterate's footholds of the swings in the horizon, in order."""
+    out: dict[str, np.ndarray] = {}
+    for i, foot in enumerate(FEET):
+        col = contact[:, i]
+        starts = [k for k in range(1, col.size) if col[k] and not col[k - 1]]
+        out[foot] = iterate.p_foot[starts, i] if starts else iterate.p_foot[-1:, i]
+    return out

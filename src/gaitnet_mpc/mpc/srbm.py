@@ -28,23 +28,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gaitnet_mpc.control.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.geometry import GRAVITY_MPS2, skew
+from gaitnet_mpc.mpc.contact import ContactParams, foot_wrench_constraints
 from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, make_workspace
 from gaitnet_mpc.robots import FEET
 
 NX = 13  # [Theta (3), p (3), omega (3), v (3), 1]
 NU_FOOT = 6
 NU = 2 * NU_FOOT
-GRAVITY_MPS2 = 9.81
 
 #: ``(foot_index, stage_mask (h,), J_T (n_leg, 6), tau_max (n_leg,))``, see SRBMMPC.build.
 TorqueLimits = tuple[int, np.ndarray, np.ndarray, np.ndarray]
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrix: ``skew(a) @ b == np.cross(a, b)``."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass(frozen=True)

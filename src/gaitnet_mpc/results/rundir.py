@@ -2,7 +2,9 @@
 
 A run folder (written by ``gaitnet-mpc run``, see :mod:`gaitnet_mpc.runner.episode`) holds
 ``summary.json``, ``log.csv`` (one row per control tick), ``mpc_log.csv`` (one row per MPC
-solve, MPC controllers only), ``course.json``, ``video.mp4`` and ``plots/``. Everything
+solve, MPC controllers only), ``course.json``, ``config.toml`` (the controller's settings,
+controllers with settings only, see :mod:`gaitnet_mpc.config`), ``video.mp4`` and
+``plots/``. Everything
 here reads only those files, so plots and comparisons can be re-made at any time.
 """
 
@@ -25,6 +27,7 @@ SUMMARY = "summary.json"
 LOG = "log.csv"
 MPC_LOG = "mpc_log.csv"
 COURSE = "course.json"
+CONFIG = "config.toml"
 VIDEO = "video.mp4"
 PLOTS_DIR = "plots"
 
@@ -125,7 +128,7 @@ def save_figure_atomic(fig: Any, path: str | Path, dpi: int = 110) -> Path:
 
 
 #: Files and folders a run writes into its run folder (``--overwrite`` removes these).
-RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, COURSE, VIDEO, "video.part.mp4", PLOTS_DIR)
+RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, COURSE, CONFIG, VIDEO, "video.part.mp4", PLOTS_DIR)
 #: Files ``compare`` writes into its output folder.
 COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
 

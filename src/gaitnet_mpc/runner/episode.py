@@ -12,9 +12,8 @@ by :mod:`gaitnet_mpc.results.plots`):
 
 from __future__ import annotations
 
-import io
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +24,7 @@ from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.results.io import write_atomic, write_json_atomic
 from gaitnet_mpc.robots import FEET
+from gaitnet_mpc.runner.logs import H_COLS, EpisodeLog, TelemetryRecorder
 from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
 
 
@@ -35,170 +35,6 @@ class VideoConfig:
     fps: int = 30
     width_px: int = 640
     height_px: int = 480
-
-
-@dataclass
-class EpisodeLog:
-    """Per-tick time series, kept in memory and written as CSV.
-
-    ``self_contact`` is 1 on ticks where two robot geoms touch (see
-    :class:`~gaitnet_mpc.sim.simulator.SelfCollisionStats`), else 0.
-    """
-
-    columns: tuple[str, ...] = (
-        "t_s",
-        "com_x_m",
-        "com_y_m",
-        "com_z_m",
-        "com_vx_mps",
-        "com_vy_mps",
-        "com_vz_mps",
-        "roll_rad",
-        "pitch_rad",
-        "yaw_rad",
-        "cmd_vx_mps",
-        "contact_left",
-        "contact_right",
-        "fz_left_n",
-        "fz_right_n",
-        "lGx",
-        "lGy",
-        "lGz",
-        "kGx",
-        "kGy",
-        "kGz",
-        "tau_abs_max_nm",
-        "tau_limit_ratio_max",
-        "mpc_dt_s",
-        "mpc_n_qps",
-        "mpc_solve_ms",
-        "stance_foot",
-        "self_contact",
-    )
-    rows: list[np.ndarray] = field(default_factory=list)
-
-    def to_csv(self) -> str:
-        return _csv(self.columns, self.rows)
-
-
-@dataclass
-class MPCLog:
-    """One row per MPC solve, written as ``mpc_log.csv``.
-
-    ``dt_s`` is the MPC sampling time of the step the solve belongs to (NaN without a gait
-    schedule). For controllers that expose a kino-dynamic ``plan`` (``kd``), the
-    ``*_pred`` columns hold the momentum the plan predicts one stage ahead, at
-    ``t_pred_s``, and the ``*_meas`` columns the momentum measured at that tick (NaN when
-    the episode ended before it, or for other controllers).
-    """
-
-    columns: tuple[str, ...] = (
-        "t_s",
-        "full_solve",
-        "n_qps",
-        "converged",
-        "solve_ms",
-        "dt_s",
-        "t_pred_s",
-        "lGx_pred",
-        "kGy_pred",
-        "kGz_pred",
-        "lGx_meas",
-        "kGy_meas",
-        "kGz_meas",
-    )
-    rows: list[list[float]] = field(default_factory=list)
-
-    def fill_measured(self, log_rows: np.ndarray, h_cols: slice) -> None:
-        """Fill the ``*_meas`` columns from the tick log (first tick at or after ``t_pred_s``)."""
-        if not self.rows or log_rows.size == 0:
-            return
-        t = log_rows[:, 0]
-        h = log_rows[:, h_cols]  # (n, 6) [l_G; k_G]
-        i_pred, i_meas = self.columns.index("t_pred_s"), self.columns.index("lGx_meas")
-        for row in self.rows:
-            t_pred = row[i_pred]
-            if not np.isfinite(t_pred) or t_pred > t[-1] + 1e-9:
-                continue
-            k = int(np.searchsorted(t, t_pred - 1e-9))
-            row[i_meas : i_meas + 3] = [h[k, 0], h[k, 4], h[k, 5]]  # l_G,x, k_G,y, k_G,z
-
-    def to_csv(self) -> str:
-        return _csv(self.columns, self.rows)
-
-
-def _csv(columns: tuple[str, ...], rows: list[Any]) -> str:
-    """CSV text with a header line; ``nan`` marks values that do not apply."""
-    buf = io.StringIO()
-    data = np.asarray(rows, dtype=float).reshape(-1, len(columns))
-    np.savetxt(buf, data, delimiter=",", header=",".join(columns), comments="", fmt="%.6g")
-    return buf.getvalue()
-
-
-#: Columns of ``log.csv`` holding the measured momentum ``[l_G; k_G]``.
-_H_COLS = slice(EpisodeLog.columns.index("lGx"), EpisodeLog.columns.index("kGz") + 1)
-
-
-class _MPCProbe:
-    """Reads what a controller exposes about its MPC, tolerating controllers without it."""
-
-    def __init__(self, controller: Controller) -> None:
-        self.controller = controller
-        self.n_seen = 0
-        self.last_qps = np.nan
-        self.last_ms = np.nan
-        self.log = MPCLog() if controller.mpc_stats is not None else None
-
-    def step_dt(self) -> float:
-        sched = getattr(self.controller, "schedule", None)
-        dt = getattr(sched, "current_step_dt_s", None)
-        return float(dt) if dt is not None else np.nan
-
-    def stance_code(self) -> float:
-        sched = getattr(self.controller, "schedule", None)
-        foot = getattr(sched, "stance_foot", None)
-        return float(FEET.index(foot)) if foot in FEET else np.nan
-
-    def after_compute(self, t_s: float) -> None:
-        """Record the solves that the last ``compute`` call made."""
-        stats = self.controller.mpc_stats
-        if stats is None or self.log is None:
-            return
-        n = len(stats.solve_time_s)
-        if n == self.n_seen:
-            return
-        dt = self.step_dt()
-        n_cols = len(self.log.columns)
-        for i in range(self.n_seen, n):
-            row = [
-                t_s,
-                float(stats.full_solve[i]),
-                float(stats.qps_per_solve[i]),
-                float(stats.converged[i]),
-                1e3 * stats.solve_time_s[i],
-                dt,
-            ]
-            self.log.rows.append(row + [np.nan] * (n_cols - len(row)))
-        i_pred = self.log.columns.index("t_pred_s")
-        self.log.rows[-1][i_pred : i_pred + 4] = self._prediction(t_s)
-        self.last_qps = float(stats.qps_per_solve[n - 1])
-        self.last_ms = 1e3 * stats.solve_time_s[n - 1]
-        self.n_seen = n
-
-    def _prediction(self, t_s: float) -> list[float]:
-        """``[t_pred, l_G,x, k_G,y, k_G,z]`` one stage ahead of a plan made at ``t_s``."""
-        none = [np.nan] * 4
-        plan = getattr(self.controller, "plan", None)
-        step = getattr(plan, "last_step", None)
-        states = getattr(step, "states", None)
-        dts = getattr(plan, "dts_s", None)
-        t_plan = getattr(plan, "t_plan_s", None)
-        if states is None or dts is None or t_plan is None or abs(t_plan - t_s) > 1e-9:
-            return none  # no plan, or the solve failed and the old plan was kept
-        states = np.asarray(states)
-        if states.ndim != 2 or states.shape[0] < 2 or states.shape[1] < 12:
-            return none
-        return [t_plan + float(dts[0]), states[1, 6], states[1, 10], states[1, 11]]
 
 
 #: Marker colours (RGBA) of planned footholds, as the course colours: left blue, right red.
@@ -229,7 +65,7 @@ def _log_row(
     cmd: Command,
     tau: np.ndarray,
     tau_limit: np.ndarray,
-    probe: _MPCProbe,
+    probe: TelemetryRecorder,
     self_contact: bool,
 ) -> np.ndarray:
     """One row of :class:`EpisodeLog` (columns in its order)."""
@@ -279,7 +115,7 @@ def run_episode(
     controller.reset(state)
     com0 = state.com_world_m.copy()
     log = EpisodeLog()
-    probe = _MPCProbe(controller)
+    probe = TelemetryRecorder(controller)
     tau_limit = np.maximum(sim.model.actuator_ctrlrange[:, 1].copy(), 1e-9)
     renderer, writer, frame_dt, next_frame_t = None, None, np.inf, 0.0
     tmp_video = None
@@ -346,7 +182,7 @@ def run_episode(
         out = Path(out_dir)
         write_atomic(out / "log.csv", log.to_csv())
         if probe.log is not None:
-            probe.log.fill_measured(np.asarray(log.rows).reshape(-1, len(log.columns)), _H_COLS)
+            probe.log.fill_measured(np.asarray(log.rows).reshape(-1, len(log.columns)), H_COLS)
             write_atomic(out / "mpc_log.csv", probe.log.to_csv())
         write_json_atomic(out / "course.json", sim.course.to_dict())
         if tmp_video is not None:

@@ -1,0 +1,141 @@
+"""Linear constraints on one foot's ground wrench [f; m] (world-aligned, about the foot centre).
+
+Friction pyramid (paper eqs. 21-22) with mu_box = mu * sqrt(2) / 2, normal-force bounds
+(eq. 23) and the wrench limits of a line foot along its heading: no moment about the foot's
+long axis, pitch moment bounded by f_z times the toe/heel distance, and a yaw moment bounded
+by friction over the foot's half length. A point foot carries no moment at all.
+
+:class:`StanceWrenchRows` evaluates the stance rows of one foot model at every stage and
+foot of an MPC horizon, memoised by yaw (the yaws repeat within and across solves).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitnet_mpc.errors import ConfigError
+
+INF = np.inf
+
+
+@dataclass(frozen=True)
+class ContactParams:
+    """Contact model shared by all controllers (paper Table VIII)."""
+
+    mu: float = 0.7
+    fz_min_n: float = 10.0
+    fz_max_n: float = 500.0
+
+    @property
+    def mu_box(self) -> float:
+        """Inscribed friction-pyramid coefficient, eq. (21)."""
+        return self.mu * np.sqrt(2.0) / 2.0
+
+
+def foot_wrench_constraints(
+    yaw_rad: float,
+    params: ContactParams,
+    toe_m: float,
+    heel_m: float,
+    in_stance: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows ``C`` (m, 6) and bounds ``l, u`` with ``l <= C [f; m] <= u`` for one foot.
+
+    In swing (``in_stance=False``) the whole wrench is bounded to zero (eq. 23 with sigma=0).
+    """
+    c_yaw, s_yaw = np.cos(yaw_rad), np.sin(yaw_rad)
+    axis = np.array([c_yaw, s_yaw, 0.0])  # foot long axis (toe direction)
+    lateral = np.array([-s_yaw, c_yaw, 0.0])
+    mu = params.mu_box
+    rows: list[np.ndarray] = []
+    lo: list[float] = []
+    hi: list[float] = []
+
+    def add(row: np.ndarray, lower: float, upper: float) -> None:
+        rows.append(row)
+        lo.append(lower)
+        hi.append(upper)
+
+    if not in_stance:
+        for i in range(6):
+            add(np.eye(6)[i], 0.0, 0.0)
+        return np.array(rows), np.array(lo), np.array(hi)
+    ez = np.array([0.0, 0.0, 1.0])
+    add(np.r_[ez, 0, 0, 0], params.fz_min_n, params.fz_max_n)
+    for tangent in (np.array([1.0, 0, 0]), np.array([0, 1.0, 0])):
+        add(np.r_[tangent - mu * ez, 0, 0, 0], -INF, 0.0)  # f_t <= mu f_z
+        add(np.r_[tangent + mu * ez, 0, 0, 0], 0.0, INF)  # f_t >= -mu f_z
+    if toe_m == 0.0 and heel_m == 0.0:
+        for i in range(3):
+            add(np.eye(6)[3 + i], 0.0, 0.0)
+        return np.array(rows), np.array(lo), np.array(hi)
+    add(np.r_[0, 0, 0, axis], 0.0, 0.0)  # no moment about the line
+    # Pitch moment about the lateral axis: the CoP stays between heel and toe.
+    # m_lat = -(x_cop) f_z along the axis, so -toe f_z <= m_lat <= heel f_z.
+    add(np.r_[toe_m * ez, lateral], 0.0, INF)
+    add(np.r_[-heel_m * ez, lateral], -INF, 0.0)
+    half = 0.5 * (toe_m + heel_m)
+    add(np.r_[-mu * half * ez, ez], -INF, 0.0)  # |m_z| <= mu * half length * f_z
+    add(np.r_[mu * half * ez, ez], 0.0, INF)
+    return np.array(rows), np.array(lo), np.array(hi)
+
+
+class StanceWrenchRows:
+    """Stance rows of :func:`foot_wrench_constraints` for one foot model, memoised by yaw.
+
+    Args:
+        params: friction and normal-force limits.
+        toe_m, heel_m: line-foot lengths [m] (both 0: point foot).
+        cache_size: memoised yaws kept before the memo is cleared.
+    """
+
+    def __init__(
+        self, params: ContactParams, toe_m: float, heel_m: float, cache_size: int = 256
+    ) -> None:
+        self.params = params
+        self.toe_m = toe_m
+        self.heel_m = heel_m
+        self.cache_size = cache_size
+        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
+        #: Stance rows per foot (the same at every yaw).
+        self.n_rows = int(c_rows.shape[0])
+        #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
+        self.full_column_rank = bool(np.linalg.matrix_rank(c_rows) == 6)
+        self._cache: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+
+    def at(self, yaw_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Stance rows ``C`` (m, 6) and bounds ``l, u`` (m,) at ``yaw_rad``, memoised."""
+        rows = self._cache.get(yaw_rad)
+        if rows is None:
+            rows = foot_wrench_constraints(yaw_rad, self.params, self.toe_m, self.heel_m, True)
+            if rows[0].shape[0] != self.n_rows:  # pragma: no cover - model change
+                raise ConfigError("foot_yaw_rad", yaw_rad, "a yaw with the stance row count")
+            if len(self._cache) >= self.cache_size:
+                self._cache.clear()
+            self._cache[yaw_rad] = rows
+        return rows
+
+    def stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Stance rows ``C`` (..., m, 6) and bounds ``l, u`` (..., m) at every yaw of
+        ``foot_yaw_rad`` (...); read-only, and the last result is kept (the yaws are fixed
+        within a sequential solve)."""
+        key = foot_yaw_rad.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        rows = [self.at(yaw) for yaw in foot_yaw_rad.ravel().tolist()]
+        shape = (*foot_yaw_rad.shape, self.n_rows)
+        out = (
+            np.stack([r[0] for r in rows]).reshape(*shape, 6),
+            np.stack([r[1] for r in rows]).reshape(shape),
+            np.stack([r[2] for r in rows]).reshape(shape),
+        )
+        for arr in out:
+            arr.flags.writeable = False
+        self._last = (key, out)
+        return out
+
+
+__all__ = ["ContactParams", "StanceWrenchRows", "foot_wrench_constraints"]

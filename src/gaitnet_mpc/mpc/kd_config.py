@@ -1,0 +1,123 @@
+"""Parameters of the CMPC sub-problem (paper Tables VIII and X) and its QP backend.
+
+Backend timing (default ``qp_backend="piqp"``)
+----------------------------------------------
+QP: n = 33 h + 15 = 345 variables, 15 h + 15 = 165 equality rows (nnz 975), 254
+inequality rows (20 x 10 line-foot wrench rows + 54 tie rows, nnz 1308; 8 rows per foot
+and stage for point feet), a box on all 345 variables, diagonal P (333 nonzeros).
+Solve time of ``QPWorkspace.solve`` (setup/update + solve + conversions) over the 6 QPs of
+a sequential solve of a walking problem (h = 10, dt 0.05/0.06 s, single support, converged
+to Table X tolerances after 5 iterations), best of 40 repetitions per QP, three runs on a
+shared 2-core development VM (load 2-4, so medians are 1.5-3x higher):
+
+* PIQP: 2.5-4.9 ms per QP, 16-25 ms for all 6 (11-13 interior-point iterations each,
+  steps reach ~1e-12, so the Table X tolerances are never limited by the solver);
+* OSQP: 2.2-2.4 ms per QP once its own warm start is close, 5-16 ms for the first three,
+  25-52 ms for all 6 (stalls at ~1e-7 step accuracy);
+* Clarabel: 7.3-13 ms per QP, 44-73 ms (fresh setup every solve);
+* DAQP (dense active set): 15-21 ms per QP, 91-119 ms.
+
+Best of the three runs, all 6 QPs: PIQP 16.1 ms, OSQP 25.5 ms, Clarabel 44.2 ms, DAQP
+90.7 ms. PIQP is the default.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.geometry import GRAVITY_MPS2
+from gaitnet_mpc.mpc.contact import ContactParams
+
+#: Backend settings applied under ``KDConfig.qp_options``. PIQP's relative duality-gap test
+#: is measured against the large state-tracking terms of eq. 18 (objective ~1e5), which
+#: lets weakly active foothold bounds (gradient ~0.05) end 1e-5 m inside; one more
+#: interior-point iteration with these settings reaches the bound to ~1e-9 m.
+BACKEND_OPTIONS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
+    {"piqp": MappingProxyType({"eps_duality_gap_rel": 1e-12, "eps_duality_gap_abs": 1e-10})}
+)
+
+
+def _positive(name: str, value: float) -> None:
+    if not (np.isfinite(value) and value > 0.0):
+        raise ConfigError(name, value, "a finite float > 0")
+
+
+def _weights(name: str, value: tuple[float, ...], size: int) -> None:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (size,) or not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
+        raise ConfigError(name, value, f"{size} finite non-negative floats")
+
+
+@dataclass(frozen=True)
+class KDConfig:
+    """Parameters of the CMPC sub-problem (paper Tables VIII and X; units in names).
+
+    Weights are the diagonals of eq. 18's ``L`` matrices (``w_momentum`` is ``L^h`` over
+    ``[l_G; k_G]``, ``w_pose`` is ``L^H``). ``reg_*`` weight the proximal term on the
+    search directions (:mod:`~gaitnet_mpc.mpc.implicit_kd`). ``trust_region_m`` bounds each
+    foot-position tie group per axis around its iterate (``None``: off);
+    ``trust_region_com_m`` the same for ``delta p_c`` (off by default, see
+    :mod:`~gaitnet_mpc.mpc.implicit_kd`). ``foot_height_from_reference`` fixes the height of
+    every free foot-position group to its reference (mean over the group's stance stages)
+    unless foothold bounds give it a finite height range. ``qp_options`` are passed to
+    :func:`~gaitnet_mpc.mpc.qp.make_workspace` (over :data:`BACKEND_OPTIONS`).
+    """
+
+    horizon: int = 10
+    mass_kg: float = 16.0  # humanoid3d total mass; pass RobotModel.total_mass_kg
+    gravity_mps2: float = GRAVITY_MPS2
+    w_momentum: tuple[float, ...] = (10.0,) * 6  # L^h
+    w_pose: tuple[float, ...] = (200.0,) * 6  # L^H
+    w_p_foot: tuple[float, float, float] = (0.1, 0.1, 0.1)  # L^{p_f}
+    w_p_com: tuple[float, float, float] = (100.0, 100.0, 250.0)  # L^{p_c}
+    w_force: float = 1e-4  # L^f
+    w_moment: float = 1e-3  # L^tau
+    reg_force: float = 1e-6
+    reg_moment: float = 1e-5
+    reg_position: float = 1e-2
+    contact: ContactParams = field(default_factory=ContactParams)
+    toe_m: float = 0.075
+    heel_m: float = 0.075
+    foot_height_from_reference: bool = True
+    #: Smallest lateral distance [m] between the feet in the stance foot's heading frame
+    #: (:mod:`~gaitnet_mpc.mpc.implicit_kd`); None: no such row (the paper has none).
+    min_foot_separation_m: float | None = None
+    trust_region_m: float | None = 0.1
+    trust_region_com_m: float | None = None
+    qp_backend: str = "piqp"  # fastest here, see the module docstring
+    qp_options: tuple[tuple[str, Any], ...] = ()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.horizon, int | np.integer) or self.horizon < 1:
+            raise ConfigError("horizon", self.horizon, "an integer >= 1")
+        _positive("mass_kg", self.mass_kg)
+        if not (np.isfinite(self.gravity_mps2) and self.gravity_mps2 >= 0.0):
+            raise ConfigError("gravity_mps2", self.gravity_mps2, "a finite float >= 0")
+        _weights("w_momentum", self.w_momentum, 6)
+        _weights("w_pose", self.w_pose, 6)
+        _weights("w_p_foot", self.w_p_foot, 3)
+        _weights("w_p_com", self.w_p_com, 3)
+        for name in ("w_force", "w_moment", "reg_force", "reg_moment", "reg_position"):
+            _weights(name, (getattr(self, name),), 1)
+        for name in ("toe_m", "heel_m"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0.0):
+                raise ConfigError(name, value, "a finite float >= 0 (0 for a point foot)")
+        for name in ("trust_region_m", "trust_region_com_m", "min_foot_separation_m"):
+            value = getattr(self, name)
+            if value is not None:
+                _positive(name, value)
+
+    def qp_workspace_options(self) -> dict[str, Any]:
+        """Options of :func:`~gaitnet_mpc.mpc.qp.make_workspace`: :data:`BACKEND_OPTIONS`
+        of ``qp_backend``, overridden by ``qp_options``."""
+        return {**BACKEND_OPTIONS.get(self.qp_backend, {}), **dict(self.qp_options)}
+
+
+__all__ = ["BACKEND_OPTIONS", "KDConfig"]
