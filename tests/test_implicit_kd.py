@@ -64,7 +64,7 @@ def converge(
     """Algorithm 1 without Gait-Net: apply full steps until Table X tolerances hold."""
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
     for j in range(max_iter):
-        step = sub.solve(iterate=it, **args, **kw)
+        step = sub.solve(it, sub.inputs(it, **args, **kw))
         it = it.apply(step)
         if step.converged():
             return it, step, j + 1
@@ -142,7 +142,7 @@ def test_linearised_dynamics_match_eq10_to_first_order(sub: KDSubproblem) -> Non
     x0, dts, it = _random_consistent_iterate(rng)
     args, _ = walking_problem(dts)
     args["x0"] = x0
-    problem = sub.build(iterate=it, **args)
+    problem = sub.build(it, sub.inputs(it, **args))
     d_f = rng.normal(scale=100.0, size=(H, 2, 3))
     d_tau = rng.normal(scale=10.0, size=(H, 2, 3))
     d_pf = rng.normal(scale=1.0, size=(H, 2, 3))
@@ -173,7 +173,7 @@ def test_converged_iterate_gives_zero_step(sub: KDSubproblem) -> None:
     args, pc0 = walking_problem()
     it, _, n_iter = converge(sub, args, pc0)
     assert n_iter <= 15
-    step = sub.solve(iterate=it, **args)
+    step = sub.solve(it, sub.inputs(it, **args))
     tol = KDTolerances()
     assert step.max_delta_pos_m < tol.position_m
     assert step.max_delta_force_n < tol.force_n
@@ -223,12 +223,12 @@ def test_sparsity_pattern_fixed_across_schedules_and_yaw() -> None:
     sub = KDSubproblem(KDConfig(mass_kg=MASS))
     args, pc0 = walking_problem()
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
-    first = sub.build(iterate=it, **args)
+    first = sub.build(it, sub.inputs(it, **args))
     other = dict(args)
     other["contact"] = np.roll(args["contact"], 2, axis=0)
     other["contact"][:2] = True
     other["foot_yaw_rad"] = np.full((H, 2), 0.3)
-    second = sub.build(iterate=it, **other)
+    second = sub.build(it, sub.inputs(it, **other))
     for name in ("P", "A_eq", "A"):
         a, b = getattr(first, name), getattr(second, name)
         assert np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
@@ -272,7 +272,7 @@ def test_push_moves_next_foothold_and_stays_feasible(toe_m: float) -> None:
     p_com[0] = pc0 + np.array([0.01, 0.01, 0.0])  # new CoM measurement
     it = replace(it, p_com=p_com)
     for _ in range(30):
-        step = sub.solve(iterate=it, **args)
+        step = sub.solve(it, sub.inputs(it, **args))
         it = it.apply(step)
         if step.converged():
             break
@@ -285,7 +285,9 @@ def test_backends_agree_on_one_subproblem() -> None:
     args, pc0 = walking_problem()
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
     steps = {
-        be: KDSubproblem(KDConfig(mass_kg=MASS, qp_backend=be)).solve(iterate=it, **args)
+        be: (sub := KDSubproblem(KDConfig(mass_kg=MASS, qp_backend=be))).solve(
+            it, sub.inputs(it, **args)
+        )
         for be in ("piqp", "osqp", "clarabel", "daqp")
     }
     ref = steps.pop("piqp")
@@ -325,7 +327,7 @@ def test_bad_shapes_raise_config_error(sub: KDSubproblem, name: str, value: np.n
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
     args[name] = value
     with pytest.raises(ConfigError) as err:
-        sub.build(iterate=it, **args)
+        sub.build(it, sub.inputs(it, **args))
     assert err.value.field == name
 
 
@@ -337,11 +339,11 @@ def test_bad_iterate_and_bounds_raise_config_error(sub: KDSubproblem) -> None:
     assert err.value.field == "iterate.p_com"
     short = KDIterate(f=it.f[:5], tau=it.tau[:5], p_foot=it.p_foot[:5], p_com=it.p_com[:6])
     with pytest.raises(ConfigError, match="iterate"):
-        sub.build(iterate=short, **args)
+        sub.build(short, sub.inputs(short, **args))
     with pytest.raises(ConfigError, match="foothold_bounds"):
-        sub.build(iterate=it, foothold_bounds={"middle": (None, None)}, **args)
+        sub.build(it, sub.inputs(it, foothold_bounds={"middle": (None, None)}, **args))
     with pytest.raises(ConfigError, match="p_min <= p_max"):
-        sub.build(iterate=it, foothold_bounds={"left": (np.ones(3), np.zeros(3))}, **args)
+        sub.build(it, sub.inputs(it, foothold_bounds={"left": (np.ones(3), np.zeros(3))}, **args))
     with pytest.raises(ConfigError, match="horizon"):
         KDConfig(horizon=0)
     with pytest.raises(ConfigError, match="w_p_com"):

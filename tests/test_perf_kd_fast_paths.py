@@ -221,7 +221,7 @@ def sub() -> KDSubproblem:
 @pytest.mark.parametrize("seed", range(8))
 def test_fast_assembly_matches_dense_reference(sub: KDSubproblem, seed: int) -> None:
     args, it = random_case(seed)
-    problem = sub.build(iterate=it, **args)
+    problem = sub.build(it, sub.inputs(it, **args))
     ref = dense_reference(sub, args, it)
     for name in ("P", "A_eq", "A"):
         np.testing.assert_allclose(getattr(problem, name).toarray(), ref[name], atol=1e-12)
@@ -230,10 +230,10 @@ def test_fast_assembly_matches_dense_reference(sub: KDSubproblem, seed: int) -> 
 
 
 def test_pattern_is_the_same_for_every_case(sub: KDSubproblem) -> None:
-    first = sub.build(iterate=random_case(0)[1], **random_case(0)[0])
+    first = sub.build(random_case(0)[1], sub.inputs(random_case(0)[1], **random_case(0)[0]))
     for seed in range(1, 4):
         args, it = random_case(seed)
-        other = sub.build(iterate=it, **args)
+        other = sub.build(it, sub.inputs(it, **args))
         for name in ("P", "A_eq", "A"):
             a, b = getattr(first, name), getattr(other, name)
             assert a.has_canonical_format and b.has_canonical_format
@@ -248,7 +248,7 @@ def test_updated_piqp_workspace_matches_fresh_solves() -> None:
         args, it = random_case(seed)
         args["p_foot_measured"] = it.p_foot[0]  # feasible: the stance foot stays put
         args["foothold_bounds"] = None
-        problem = sub.build(iterate=it, **args)
+        problem = sub.build(it, sub.inputs(it, **args))
         updated = sub.workspace.solve(problem)
         fresh = make_workspace("piqp", **dict(sub.workspace.options)).solve(problem)
         assert updated.status == fresh.status

@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.preview import PreviewConfig, plan_preview
-from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
+from gaitnet_mpc.geometry import GRAVITY_MPS2
 from gaitnet_mpc.terrain import Course, Patch, load_course
 
 Z_C_M = 0.555

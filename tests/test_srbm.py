@@ -129,7 +129,7 @@ def test_stage_weight_is_in_the_heading_frame(mpc: SRBMMPC) -> None:
 def test_lip_foothold_gains_are_deadbeat_with_the_sway_orbit() -> None:
     """On the LIP, the Raibert law with the LIP gains cancels a velocity error in one step
     and its lateral fixed point is the sway orbit with the requested half-width."""
-    from gaitnet_mpc.control.walking import lip_gains
+    from gaitnet_mpc.gait.lip import lip_gains
 
     z0, step, d = 0.52, 0.225, 0.07
     omega, k_v, offset, _ = lip_gains(z0, step, d)

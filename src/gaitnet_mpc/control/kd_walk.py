@@ -32,6 +32,7 @@ from gaitnet_mpc.gait import (
     SwingConfig,
     SwingTrajectory,
 )
+from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
 from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
@@ -44,7 +45,6 @@ from gaitnet_mpc.mpc.sequential import (
     SequentialKDMPC,
     SequentialResult,
 )
-from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 from gaitnet_mpc.terrain import Course
@@ -335,9 +335,8 @@ class KDWalkController(WalkingBase):
 
         With a line foot (no roll moment) the CoM obeys ``y'' = omega^2 (y - p_y)`` about the
         stance foot ``p_y``, so a gait with feet at ``+-b`` beside a centre line needs the
-        periodic sway ``y = s b (1 - cosh(omega (tau - T/2)) / cosh(omega T / 2))`` (``s``
-        = +1 in left stance, ``tau`` the time in a step of length ``T``), ``y' = -s b omega
-        sinh(omega (tau - T/2)) / cosh(omega T / 2)``. The straight line with ``l_y = 0`` is
+        periodic sway of :func:`~gaitnet_mpc.gait.lip.lip_sway_orbit`. The straight line with
+        ``l_y = 0`` is
         only reachable with the feet under the CoM. The centre line is the commanded path
         (lateral offset from the measured CoM clamped by ``lip_anchor_max_m``); x and the
         height are f_ref's (NaN).
@@ -365,11 +364,8 @@ class KDWalkController(WalkingBase):
         tau = times - start[kk]
         T = length[kk]
         z = max(float(self.mpc.ref_workspace.com_height_m), 0.2)
-        w = np.sqrt(GRAVITY_MPS2 / z)
-        b = self.config.lip_half_width_m
-        den = np.cosh(w * T / 2)
-        y_off = side[kk] * b * (1.0 - np.cosh(w * (tau - T / 2)) / den)
-        v_off = -side[kk] * b * w * np.sinh(w * (tau - T / 2)) / den
+        w = lip_frequency(z)
+        y_off, v_off = lip_sway_orbit(side[kk], self.config.lip_half_width_m, w, tau, T)
         # centre line: commanded path, lateral offset from the measured CoM
         yaw = self.profile.heading_rad(state.t_s)
         e_x = np.array([np.cos(yaw), np.sin(yaw)])

@@ -20,6 +20,7 @@ from gaitnet_mpc.control.stance import StanceMap
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import WalkingConfig, WalkingController
 from gaitnet_mpc.errors import QPSolveError
+from gaitnet_mpc.gait.lip import lip_propagate
 from gaitnet_mpc.mpc.srbm import NX, SRBMMPC, SRBMConfig
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
@@ -155,8 +156,10 @@ class SRBMWalkController(WalkingController):
             p_sw = self.foothold[swing_now]
         # The stance foot lands again (step 2) where the heuristic puts it for the CoM
         # state predicted by the LIP over the rest of this step and the next one.
-        p_td, v_td = self._lip(state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], t_left)
-        p_td2, v_td2 = self._lip(p_td, v_td, p_sw[:2], t_next)
+        p_td, v_td = lip_propagate(
+            state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], self.omega, t_left
+        )
+        p_td2, v_td2 = lip_propagate(p_td, v_td, p_sw[:2], self.omega, t_next)
         future = self._foothold(
             state, stance_now, p_td2, v_td2, p_sw, state.t_s + t_left + t_next, t_next
         )

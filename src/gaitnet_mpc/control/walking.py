@@ -45,7 +45,6 @@ Design notes (each setting of :class:`WalkingConfig` says why it has its value):
 
 from __future__ import annotations
 
-import math
 from abc import abstractmethod
 from dataclasses import dataclass, field
 
@@ -65,7 +64,7 @@ from gaitnet_mpc.gait import (
     SwingTrajectory,
     keep_beside_stance,
 )
-from gaitnet_mpc.mpc.srbm import GRAVITY_MPS2
+from gaitnet_mpc.gait.lip import lip_gains, lip_propagate
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -132,30 +131,6 @@ class WalkingConfig:
         default_factory=lambda: SwingConfig(touchdown_speed_mps=0.3, foot_half_length_m=0.075)
     )
     touchdown_depth_m: float = 0.005  # swing targets end this far below the ground
-
-
-def lip_gains(z0_m: float, step_s: float, half_width_m: float) -> tuple[float, float, float, float]:
-    """LIP foothold gains for CoM height ``z0_m`` and step (stance) time ``step_s``.
-
-    Returns ``(omega, k_v, lateral_offset, cmd_scale)``: the LIP frequency [1/s], the
-    Raibert velocity gain ``k_v = coth(omega T)/omega - T/2`` [s] (deadbeat: after one
-    stance of ``T`` on the new foot, a velocity error is cancelled), the heuristic's lateral
-    offset [m] whose fixed point is the symmetric sway orbit with the feet ``half_width_m``
-    beside the CoM (orbit touchdown speed ``V = omega d tanh(omega T / 2)``) and the factor
-    applied to the velocity command inside the heuristic [-] (see below).
-    """
-    omega = math.sqrt(GRAVITY_MPS2 / z0_m)
-    x = omega * step_s
-    k_v = 1.0 / (omega * math.tanh(x)) - 0.5 * step_s
-    t = math.tanh(0.5 * x)
-    # Walking at mean speed v on the LIP, the CoM is fastest at touchdown:
-    # v_td = v (x/2) coth(x/2) (8 % above v here). The heuristic's fixed point is that
-    # orbit (foothold v T / 2 ahead of the CoM) when its velocity command is scaled by
-    # kappa + (kappa - 1) T / (2 k_v); with the plain command its fixed point is an orbit
-    # about 10 % slower than commanded, which the MPC then has to make up with the CoP.
-    kappa = 0.5 * x / math.tanh(0.5 * x)
-    cmd_scale = kappa + (kappa - 1.0) * step_s / (2.0 * k_v)
-    return omega, k_v, half_width_m * (1.0 - t * t) / 2.0, cmd_scale
 
 
 def swing_beside_stance(
@@ -266,15 +241,6 @@ class WalkingController(WalkingBase):
         if norm > self.config.path_max_error_m:
             self.path_xy = state.com_world_m[:2] + err * (self.config.path_max_error_m / norm)
 
-    def _lip(
-        self, p_xy: np.ndarray, v_xy: np.ndarray, foot_xy: np.ndarray, t_s: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """CoM (position, velocity) in the plane after ``t_s`` on the LIP about ``foot_xy``."""
-        w = self.omega
-        ch, sh = math.cosh(w * t_s), math.sinh(w * t_s)
-        d = p_xy - foot_xy
-        return foot_xy + d * ch + v_xy * (sh / w), d * (w * sh) + v_xy * ch
-
     def _path_feedback(self, state: RobotState, yaw: float) -> np.ndarray:
         """Bounded velocity (heading frame) that steers the footholds back to the path."""
         ex, ey = self.path_xy - state.com_world_m[:2]
@@ -331,8 +297,8 @@ class WalkingController(WalkingBase):
         """Foothold of the current swing foot: Raibert at the LIP-predicted touchdown."""
         sched = self.schedule
         p_st = self._stance_pos(state, sched.stance_foot)
-        p_td, v_td = self._lip(
-            state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], t_left_s
+        p_td, v_td = lip_propagate(
+            state.com_world_m[:2], state.com_vel_world_mps[:2], p_st[:2], self.omega, t_left_s
         )
         next_dt = sched.next_step_dt_s or sched.current_step_dt_s
         stance_s = sched.config.stages_per_step * next_dt

@@ -43,7 +43,7 @@ import scipy.sparse as sp
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.geometry import GRAVITY_MPS2
+from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.robots.spec import FEET
 from gaitnet_mpc.terrain import Course
 
@@ -268,7 +268,7 @@ def plan_preview(
     prog.fix(y[0], y0)
     prog.fix(vy[0], float(com_v_mps[1]))
 
-    w = math.sqrt(GRAVITY_MPS2 / com_height_m)
+    w = lip_frequency(com_height_m)
     for k in range(S):
         ch, sh = math.cosh(w * stage_dt[k]), math.sinh(w * stage_dt[k])
         i = int(stage_step[k])

@@ -246,10 +246,10 @@ class KDSubproblem:
         self._q_p_foot = 2.0 * np.asarray(c.w_p_foot)
 
     # ------------------------------------------------------------------ build
-    def build(
+    def inputs(
         self,
-        x0: np.ndarray,
         iterate: KDIterate,
+        x0: np.ndarray,
         h_ref: np.ndarray,
         H_ref: np.ndarray,
         p_foot_ref: np.ndarray,
@@ -259,12 +259,12 @@ class KDSubproblem:
         foot_yaw_rad: np.ndarray,
         foothold_bounds: Mapping[str, tuple[Any, ...]] | None = None,
         p_foot_measured: np.ndarray | None = None,
-    ) -> QPProblem:
-        """The CMPC QP of iteration ``j + 1`` about ``iterate`` (``j``).
+    ) -> KDInputs:
+        """The per-solve data of the QP about ``iterate``, checked (:class:`KDInputs`).
 
         Args:
-            x0: (12,) measured ``[H; l_G; k_G]``.
             iterate: linearisation point; ``iterate.p_com[0]`` is the measured CoM.
+            x0: (12,) measured ``[H; l_G; k_G]``.
             h_ref: (h + 1, 6) momentum reference ``[l_G; k_G]``; row 0 unused.
             H_ref: (h + 1, 6) centroidal-pose reference; row 0 unused.
             p_foot_ref: (h, 2, 3) foot reference [m] (swing stages: planned foothold).
@@ -282,11 +282,14 @@ class KDSubproblem:
         Raises:
             ConfigError: an argument has the wrong shape or invalid values.
         """
-        a = KDInputs.check(
+        return KDInputs.check(
             self.horizon, x0, iterate, h_ref, H_ref, p_foot_ref, p_com_ref, dts_s, contact,
             foot_yaw_rad, foothold_bounds, p_foot_measured,
         )  # fmt: skip
-        return self._assemble(iterate, a)
+
+    def build(self, iterate: KDIterate, inputs: KDInputs) -> QPProblem:
+        """The CMPC QP of iteration ``j + 1`` about ``iterate`` (``j``), eqs. 13-24."""
+        return self._assemble(iterate, inputs)
 
     def _assemble(self, it: KDIterate, a: KDInputs) -> QPProblem:
         """The QP of :meth:`build`, every stage and foot at once (vectorised)."""
@@ -427,30 +430,13 @@ class KDSubproblem:
         ub[cols] = hi[groups] - p_it
 
     # ------------------------------------------------------------------ solve
-    def solve(
-        self,
-        x0: np.ndarray,
-        iterate: KDIterate,
-        h_ref: np.ndarray,
-        H_ref: np.ndarray,
-        p_foot_ref: np.ndarray,
-        p_com_ref: np.ndarray,
-        dts_s: np.ndarray,
-        contact: np.ndarray,
-        foot_yaw_rad: np.ndarray,
-        foothold_bounds: Mapping[str, tuple[Any, ...]] | None = None,
-        p_foot_measured: np.ndarray | None = None,
-    ) -> KDStep:
+    def solve(self, iterate: KDIterate, inputs: KDInputs) -> KDStep:
         """Build (see :meth:`build`) and solve the CMPC QP; return the search directions.
 
         Raises:
-            ConfigError: bad arguments (see :meth:`build`).
             QPSolveError: the backend found no usable solution.
         """
-        problem = self.build(
-            x0, iterate, h_ref, H_ref, p_foot_ref, p_com_ref, dts_s, contact,
-            foot_yaw_rad, foothold_bounds, p_foot_measured,
-        )  # fmt: skip
+        problem = self.build(iterate, inputs)
         sol = self.workspace.solve_or_raise(problem)
         parts = self.layout.unpack(sol.x)
         parts["delta_p_com"][0] = 0.0

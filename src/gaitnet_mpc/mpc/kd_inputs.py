@@ -21,8 +21,8 @@ from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask
 from gaitnet_mpc.mpc.kd_iterate import KDIterate
 from gaitnet_mpc.robots.spec import FEET
 
-#: Foothold bounds of one foot (eq. 24): ``p_min`` (3,), ``p_max`` (3,) [m], stage mask (h,).
-FootholdBox = tuple[np.ndarray, np.ndarray, np.ndarray]
+#: Checked foothold bounds of one foot (eq. 24): ``p_min`` (3,), ``p_max`` (3,) [m], stage mask (h,).
+StageBox = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def _foot_index(foot: object) -> int:
@@ -55,7 +55,7 @@ class KDInputs:
     contact: np.ndarray
     foot_yaw_rad: np.ndarray
     p_foot_measured: np.ndarray
-    foothold_bounds: tuple[FootholdBox | None, ...]
+    foothold_bounds: tuple[StageBox | None, ...]
 
     @classmethod
     def check(
@@ -107,11 +107,11 @@ class KDInputs:
 
 def _check_foothold_bounds(
     foothold_bounds: object, contact: np.ndarray
-) -> tuple[FootholdBox | None, ...]:
+) -> tuple[StageBox | None, ...]:
     """Foot name -> ``(p_min | None, p_max | None[, stage_mask | None])`` as one box per
     foot (``None``: unbounded); a missing or ``None`` mask is the next touchdown."""
     h = contact.shape[0]
-    bounds: list[FootholdBox | None] = [None] * N_FEET
+    bounds: list[StageBox | None] = [None] * N_FEET
     if foothold_bounds is None:
         return tuple(bounds)
     if not isinstance(foothold_bounds, Mapping):
@@ -140,4 +140,4 @@ def _check_foothold_bounds(
     return tuple(bounds)
 
 
-__all__ = ["FootholdBox", "KDInputs"]
+__all__ = ["StageBox", "KDInputs"]

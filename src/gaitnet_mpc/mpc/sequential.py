@@ -332,18 +332,22 @@ class SequentialKDMPC:
         converged = False
         n_qps = 0
         for _ in range(problem.j_max or cfg.j_max):
-            step = self.subproblem.solve(
-                x0,
+            sub = self.subproblem
+            step = sub.solve(
                 iterate,
-                h_ref,
-                pose_ref,
-                pf_ref,
-                r.p_com_ref,
-                dts,
-                contact,
-                problem.foot_yaw_rad,
-                boxes or None,
-                p_measured,
+                sub.inputs(
+                    iterate,
+                    x0,
+                    h_ref,
+                    pose_ref,
+                    pf_ref,
+                    r.p_com_ref,
+                    dts,
+                    contact,
+                    problem.foot_yaw_rad,
+                    boxes or None,
+                    p_measured,
+                ),
             )
             n_qps += 1
             alpha = 1.0

@@ -118,13 +118,18 @@ def _links_from_pinocchio(robot: RobotModel) -> list[_Link]:
         name = jmodel.shortname()
         if name == "JointModelComposite":
             comp = jmodel.extract()
-            subs = [(j.shortname(), j, pl) for j, pl in zip(comp.joints, comp.jointPlacements)]
+            subs = [
+                (j.shortname(), j, pl)
+                for j, pl in zip(comp.joints, comp.jointPlacements, strict=True)
+            ]
         else:
             subs = [(name, jmodel, None)]
         for i, (sub_name, sub, sub_pl) in enumerate(subs):
-            pl = placement if i == 0 else sub_pl
-            if i == 0 and sub_pl is not None:
-                pl = placement * sub_pl
+            # A composite's sub-joint placements chain from the composite's own placement.
+            if sub_pl is None:
+                pl = placement
+            else:
+                pl = placement * sub_pl if i == 0 else sub_pl
             last = i == len(subs) - 1
             if sub_name == "JointModelFreeFlyer":
                 kind, axis = "free", 0
@@ -164,6 +169,9 @@ class WholeBodyDynamics:
       the world-frame forces at :attr:`contact_points`.
     * ``contact_kinematics(qpos, qvel) -> (p_world (3, n_c), v_world (3, n_c))``.
     * ``step(qpos, qvel, qacc, dt_s) -> (qpos_next, qvel_next)``: eq. (3a).
+
+    Armature and joint damping of the MJCF enter as ``armature * a + damping * v`` on the
+    joint rows, as in MuJoCo's forward dynamics.
     """
 
     def __init__(self, robot: RobotModel) -> None:
@@ -266,16 +274,22 @@ class WholeBodyDynamics:
                 par_rot, par_pos = poses[link.parent]
                 o_rot, o_pos = par_rot @ r_rel, par_pos + par_rot @ p_rel
                 v_par, a_par = vels[link.parent], accs[link.parent] if a is not None else None
-            vi = ca.vertcat(
-                r_rel.T @ (v_par[0:3] + ca.cross(v_par[3:6], p_rel)), r_rel.T @ v_par[3:6]
-            ) + s_qd
+            vi = (
+                ca.vertcat(
+                    r_rel.T @ (v_par[0:3] + ca.cross(v_par[3:6], p_rel)), r_rel.T @ v_par[3:6]
+                )
+                + s_qd
+            )
             poses.append((o_rot, o_pos))
             vels.append(vi)
             sub.append((r_rel, p_rel))
             if a is not None:
-                ai = ca.vertcat(
-                    r_rel.T @ (a_par[0:3] + ca.cross(a_par[3:6], p_rel)), r_rel.T @ a_par[3:6]
-                ) + s_qdd
+                ai = (
+                    ca.vertcat(
+                        r_rel.T @ (a_par[0:3] + ca.cross(a_par[3:6], p_rel)), r_rel.T @ a_par[3:6]
+                    )
+                    + s_qdd
+                )
                 # v_i x_m (S qd), zero for the free root (S qd = v_i).
                 if link.kind != "free":
                     ai += ca.vertcat(
@@ -313,7 +327,7 @@ class WholeBodyDynamics:
         v, a = self._root_velocity(qpos, qvel, qacc)
         poses, vels, accs, sub = self._forward(qpos, v, a)
         f_links = []
-        for link, vi, ai in zip(self._links, vels, accs):
+        for link, vi, ai in zip(self._links, vels, accs, strict=True):
             m, c, ic = link.mass_kg, ca.DM(link.com_m), ca.DM(link.inertia_com_kgm2)
             if m == 0.0:
                 f_links.append(ca.SX.zeros(6))

@@ -26,7 +26,7 @@ parameter, so a new MPC call with a known schedule only re-solves.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import casadi as ca
@@ -127,12 +127,10 @@ class WholeBodyMPC:
     def _build(self, key: tuple[tuple[bool, ...], ...]) -> _Transcription:
         t0 = time.perf_counter()
         cfg, d, w = self.config, self.dyn, self.config.weights
-        h, nq, nv, nj = self.horizon_stages, d.nq, d.nv, d.n_joints
+        h, nq, nv = self.horizon_stages, d.nq, d.nv
         x_all = ca.MX.sym("w", self.n_variables())
         xs = [x_all[self._stage_offset(k) : self._stage_offset(k) + self.nx] for k in range(h + 1)]
-        us = [
-            x_all[self._stage_offset(k) + self.nx : self._stage_offset(k + 1)] for k in range(h)
-        ]
+        us = [x_all[self._stage_offset(k) + self.nx : self._stage_offset(k + 1)] for k in range(h)]
         n_par = nq + nv + h + h * nq + h * nv + h + 1
         p = ca.MX.sym("p", n_par)
         x_meas, dt = p[: nq + nv], p[nq + nv : nq + nv + h]
@@ -202,9 +200,10 @@ class WholeBodyMPC:
                 lever = d.robot.spec.foot_toe_m
                 for foot in FEET:
                     toe, heel = d.contact_points_of(foot)[:2]
-                    diff = lam[self.nf * toe : self.nf * (toe + 1)] - lam[
-                        self.nf * heel : self.nf * (heel + 1)
-                    ]
+                    diff = (
+                        lam[self.nf * toe : self.nf * (toe + 1)]
+                        - lam[self.nf * heel : self.nf * (heel + 1)]
+                    )
                     cost += w.moment * lever**2 * ca.sumsqr(diff)
             q_next, v_next = d.step(qk, vk, acc, dt[k])
             add(xs[k + 1] - ca.vertcat(q_next, v_next), 0.0, 0.0, rows=gap[k])
@@ -237,7 +236,7 @@ class WholeBodyMPC:
                     "nx": [self.nx] * (h + 1),
                     "nu": [self.nu] * h + [0],
                     "ng": n_path,
-                    "equality": [bool(lo == hi) for lo, hi in zip(lbg_all, ubg_all)],
+                    "equality": [bool(lo == hi) for lo, hi in zip(lbg_all, ubg_all, strict=True)],
                     "fatrop.print_level": 0,
                     "fatrop.max_iter": 200,
                     "fatrop.tol": 1e-6,
@@ -298,6 +297,14 @@ class WholeBodyMPC:
                         lbx[sl.stop - 1] = 0.0
         return lbx, ubx
 
+    def shift(self, solution: WBSolution) -> WBSolution:
+        """Warm start for the next MPC call: every stage moved one earlier, the last stage
+        repeated. Duals are dropped (the next call's contact schedule usually differs)."""
+        x, n_stage = solution.x_opt, self.nx + self.nu
+        h = self.horizon_stages
+        shifted = np.concatenate([x[n_stage : h * n_stage], x[(h - 1) * n_stage :]])
+        return replace(solution, x_opt=shifted, lam_g=np.zeros(0), lam_x=np.zeros(0))
+
     # ------------------------------------------------------------ solve
     def parameters(self, problem: WBProblem) -> np.ndarray:
         """NLP parameter vector of one problem (state, dt_k, reference, swing bound, ground)."""
@@ -325,7 +332,10 @@ class WholeBodyMPC:
             if k == self.horizon_stages:
                 break
             stance_pts = [
-                i for fi, f in enumerate(FEET) if problem.stance[k, fi] for i in d.contact_points_of(f)
+                i
+                for fi, f in enumerate(FEET)
+                if problem.stance[k, fi]
+                for i in d.contact_points_of(f)
             ]
             o_f = o + self.nx + d.nv + d.n_joints
             for i in stance_pts:
@@ -379,8 +389,12 @@ class WholeBodyMPC:
         self, x: np.ndarray, res: dict, stats: dict, solve_time: float, viol: float
     ) -> WBSolution:
         d, h = self.dyn, self.horizon_stages
-        states = np.array([x[self._stage_offset(k) : self._stage_offset(k) + self.nx] for k in range(h + 1)])
-        inputs = np.array([x[self._stage_offset(k) + self.nx : self._stage_offset(k + 1)] for k in range(h)])
+        states = np.array(
+            [x[self._stage_offset(k) : self._stage_offset(k) + self.nx] for k in range(h + 1)]
+        )
+        inputs = np.array(
+            [x[self._stage_offset(k) + self.nx : self._stage_offset(k + 1)] for k in range(h)]
+        )
         lam = inputs[:, d.nv + d.n_joints :].reshape(h, d.n_contacts, self.nf)
         force = np.zeros((h, d.n_contacts, 3))
         force[:, :, list(self.force_axes)] = lam

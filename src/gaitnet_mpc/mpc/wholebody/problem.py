@@ -206,9 +206,7 @@ def reference_trajectory(
     dy = (command.vx_mps * np.sin(yaw_mid) + command.vy_mps * np.cos(yaw_mid)) * dt_stage_s
     qpos_ref[:, 0] = qpos0[0] + np.cumsum(dx)
     qpos_ref[:, 1] = qpos0[1] + np.cumsum(dy)
-    qpos_ref[:, 3:7] = np.column_stack(
-        [np.cos(yaw / 2), np.zeros(h), np.zeros(h), np.sin(yaw / 2)]
-    )
+    qpos_ref[:, 3:7] = np.column_stack([np.cos(yaw / 2), np.zeros(h), np.zeros(h), np.sin(yaw / 2)])
     qvel_ref = np.zeros((h, len(nominal_qpos) - 1))
     qvel_ref[:, 0] = command.vx_mps * np.cos(yaw) - command.vy_mps * np.sin(yaw)
     qvel_ref[:, 1] = command.vx_mps * np.sin(yaw) + command.vy_mps * np.cos(yaw)
