@@ -31,6 +31,7 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
 	$(VENV)/bin/ruff format --check src tests benchmarks
+	$(VENV)/bin/mypy
 	MUJOCO_GL=egl $(VENV)/bin/pytest -q
 
 bench: $(STAMP)

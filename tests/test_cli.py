@@ -255,7 +255,8 @@ def test_a_folder_with_a_run_is_refused_unless_overwrite(tmp_path: Path, capsys)
     assert (out / "summary.json").read_text() == before  # untouched
     assert _stand_run(out, "--overwrite") == 0
     assert not (out / "video.mp4").exists()  # only the new run's files remain
-    assert sorted(p.name for p in out.iterdir()) == ["course.json", "log.csv", "summary.json"]
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["course.json", "events.csv", "log.csv", "summary.json"]
     (out / "notes.txt").write_text("mine")
     assert _stand_run(out, "--overwrite") == 2  # never deletes what a run did not write
     assert "notes.txt" in capsys.readouterr().err

@@ -118,7 +118,7 @@ class _FakeMPCController:
         self.prediction: MomentumPrediction | None = None
 
     def telemetry(self) -> Telemetry:
-        return Telemetry(0.05, "left", self.prediction)
+        return Telemetry(0.05, "left", "right", 0.25, self.prediction)
 
     def solve(self, t_s: float, full: bool) -> None:
         h = np.array([1.0 + t_s, 0.0, 0.0, 0.0, 0.2, -0.1])

@@ -74,12 +74,17 @@ class Telemetry:
     Attributes:
         step_dt_s: MPC sampling time of the current step [s].
         stance_foot: the foot that stands in the current step.
+        swing_foot: the foot that swings in the current step.
+        step_end_s: when the current step is scheduled to end (the swing foot's planned
+            touchdown) [s].
         prediction: the last plan's one-stage momentum prediction (None: no plan, or a
             controller whose MPC does not predict momentum).
     """
 
     step_dt_s: float
     stance_foot: str
+    swing_foot: str
+    step_end_s: float
     prediction: MomentumPrediction | None
 
 

@@ -66,7 +66,13 @@ class WalkingBase(Controller):
 
     def telemetry(self) -> Telemetry:
         sched = self.schedule
-        return Telemetry(sched.current_step_dt_s, sched.stance_foot, self._prediction())
+        return Telemetry(
+            step_dt_s=sched.current_step_dt_s,
+            stance_foot=sched.stance_foot,
+            swing_foot=sched.swing_foot,
+            step_end_s=sched.step_start_time_s + sched.current_step_duration_s,
+            prediction=self._prediction(),
+        )
 
     def _prediction(self) -> MomentumPrediction | None:
         """The momentum the last plan predicts one stage ahead (None: no such plan)."""

@@ -26,6 +26,7 @@ from gaitnet_mpc.terrain import Course
 SUMMARY = "summary.json"
 LOG = "log.csv"
 MPC_LOG = "mpc_log.csv"
+EVENTS = "events.csv"
 COURSE = "course.json"
 CONFIG = "config.toml"
 VIDEO = "video.mp4"
@@ -128,7 +129,7 @@ def save_figure_atomic(fig: Any, path: str | Path, dpi: int = 110) -> Path:
 
 
 #: Files and folders a run writes into its run folder (``--overwrite`` removes these).
-RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, COURSE, CONFIG, VIDEO, "video.part.mp4", PLOTS_DIR)
+RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, EVENTS, COURSE, CONFIG, VIDEO, "video.part.mp4", PLOTS_DIR)
 #: Files ``compare`` writes into its output folder.
 COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
 

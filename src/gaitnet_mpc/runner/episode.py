@@ -6,6 +6,8 @@ by :mod:`gaitnet_mpc.results.plots`):
 * ``summary.json``: episode outcome and statistics (see :func:`_summarise`).
 * ``log.csv``: one row per control tick (:class:`EpisodeLog`).
 * ``mpc_log.csv``: one row per MPC solve (:class:`MPCLog`); only for MPC controllers.
+* ``events.csv``: touchdowns, lift-offs, slips, pivots and scuffs of the feet
+  (:mod:`gaitnet_mpc.results.events`).
 * ``course.json``: the course in the JSON course format (for the top-view plot).
 * ``video.mp4``: offscreen rendering, unless disabled.
 """
@@ -22,6 +24,7 @@ import numpy as np
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.results.events import EventRecorder
 from gaitnet_mpc.results.io import write_atomic, write_json_atomic
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.logs import H_COLS, EpisodeLog, TelemetryRecorder
@@ -116,6 +119,7 @@ def run_episode(
     com0 = state.com_world_m.copy()
     log = EpisodeLog()
     probe = TelemetryRecorder(controller)
+    events = EventRecorder()
     tau_limit = np.maximum(sim.model.actuator_ctrlrange[:, 1].copy(), 1e-9)
     renderer, writer, frame_dt, next_frame_t = None, None, np.inf, 0.0
     tmp_video = None
@@ -141,6 +145,8 @@ def run_episode(
             state = sim.state()
             tau = controller.compute(state)
             probe.after_compute(state.t_s)
+            tel = controller.telemetry()
+            events.update(state, None if tel is None else {tel.swing_foot: tel.step_end_s})
             log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
             sim.step(tau)
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
@@ -184,6 +190,7 @@ def run_episode(
         if probe.log is not None:
             probe.log.fill_measured(np.asarray(log.rows).reshape(-1, len(log.columns)), H_COLS)
             write_atomic(out / "mpc_log.csv", probe.log.to_csv())
+        write_atomic(out / "events.csv", events.to_csv())
         write_json_atomic(out / "course.json", sim.course.to_dict())
         if tmp_video is not None:
             tmp_video.replace(out / "video.mp4")
