@@ -44,12 +44,8 @@ PRESETS = ("default", "paper")
 
 def run(job: tuple[str, Scenario]) -> dict:
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.kd_walk import (
-        KD_PRESETS,
-        KDWalkController,
-        preview_walk_config,
-        walk_terrain,
-    )
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.control.kd_walk_config import KD_PRESETS, preview_walk_config, walk_terrain
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.runner.episode import run_episode

@@ -46,12 +46,8 @@ def run(job: Job) -> dict:
     import mujoco
 
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.kd_walk import (
-        KDWalkConfig,
-        KDWalkController,
-        preview_walk_config,
-        walk_terrain,
-    )
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config, walk_terrain
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.runner.episode import run_episode

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from gaitnet_mpc.config import apply, dumps, load_preset, parse_overrides, preset_names
-from gaitnet_mpc.control.kd_walk import KDWalkConfig, preview_walk_config
+from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.registry import controller_config
 from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.command import Command
-from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.control.kd_walk_config import walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.sequential import FixedDt
@@ -187,7 +188,7 @@ def test_lip_lateral_reference_plans_a_proper_step_width(humanoid) -> None:
     on both sides of the commanded path (the line reference plans a near-tightrope)."""
     from dataclasses import replace
 
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 
     course = load_course("flat")
     command = Command(vx_mps=0.5)
@@ -214,7 +215,7 @@ def test_preview_sets_the_touchdown_patch_and_the_com_path(humanoid) -> None:
     """With the multi-step preview, the next touchdown's patch is the plan's, one the swing
     foot may use, and the MPC's touchdown stays in that patch's box (eq. 24) while the
     robot walks onto the first stone."""
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
     from gaitnet_mpc.gait.preview import PreviewConfig
     from gaitnet_mpc.mpc.sequential import FixedDt
 
@@ -252,7 +253,7 @@ def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
     ``kd --preview``: onto the final platform with no fall, no leg-leg contact and every
     touchdown on a stone that foot may use. dt 0.05 was chosen on this course; over 20
     seeded layouts the clean rate is 4/20 (benchmarks/results/kd_stones_rate.md)."""
-    from gaitnet_mpc.control.kd_walk import preview_walk_config
+    from gaitnet_mpc.control.kd_walk_config import preview_walk_config
     from gaitnet_mpc.mpc.sequential import FixedDt
 
     course = load_course("stepping-stones")
@@ -278,7 +279,7 @@ def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
 def test_lateral_offset_from_the_path_decays(humanoid) -> None:
     """Pushed sideways while walking, the robot walks back to its commanded path with
     ``lateral_return_time_s`` and keeps (part of) the offset without it."""
-    from gaitnet_mpc.control.kd_walk import KDWalkConfig
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
     from gaitnet_mpc.sim.disturbances import Push
     from gaitnet_mpc.sim.simulator import SimConfig
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from gaitnet_mpc.command import Command
-from gaitnet_mpc.control.kd_walk import KDWalkController, preview_walk_config, walk_terrain
+from gaitnet_mpc.control.kd_walk import KDWalkController
+from gaitnet_mpc.control.kd_walk_config import preview_walk_config, walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import load_robot

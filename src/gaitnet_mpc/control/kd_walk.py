@@ -12,16 +12,14 @@ along the course come instead from a multi-step LIP footstep plan, re-made at ev
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-from functools import partial
+from dataclasses import replace
 
 import numpy as np
 
 from gaitnet_mpc.command import Command
-from gaitnet_mpc.config import load_preset, preset_names
 from gaitnet_mpc.control.base import MomentumPrediction
-from gaitnet_mpc.control.lowlevel import LowLevelConfig
-from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
+from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
 from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError, QPSolveError
@@ -29,156 +27,21 @@ from gaitnet_mpc.gait import (
     GaitScheduleConfig,
     RaibertConfig,
     RaibertHeuristic,
-    SwingConfig,
     SwingTrajectory,
 )
 from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
-from gaitnet_mpc.gait.preview import PreviewConfig, PreviewPlan, plan_preview
+from gaitnet_mpc.gait.preview import PreviewPlan, plan_preview
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
-from gaitnet_mpc.mpc.implicit_kd import KDConfig
 from gaitnet_mpc.mpc.sequential import (
     CoMReference,
     DtPolicy,
     FootholdBox,
     KDProblem,
-    SequentialConfig,
     SequentialKDMPC,
     SequentialResult,
 )
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
-from gaitnet_mpc.terrain import Course
-
-
-def walking_kd_config() -> KDConfig:
-    """Sub-problem weights used for walking (deviation from Table VIII, measured).
-
-    With ``H = [m p_c; angular pose]`` in kg m and kg m^2, Table VIII's uniform ``L^H = 200``
-    and ``L^{p_c} = (100, 100, 250)`` make a 2 cm lateral CoM shift cost ~60x more than a
-    0.1 rad trunk roll, so from single support the plan rolled the trunk (k_G,x up to 1.7
-    kg m^2/s) instead of swaying, and the robot tipped over within 0.7 s. Weighting the
-    angular pose and momentum 10x more and the linear pose and lateral CoM less keeps the
-    trunk upright; the robot then steps in place and walks (see the issue notes).
-    """
-    return KDConfig(
-        w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0),
-        w_momentum=(10.0, 10.0, 10.0, 100.0, 100.0, 100.0),
-        w_p_com=(10.0, 1.0, 250.0),
-        # The sub-problem checks its inputs itself; skip the QP layer's second check.
-        qp_options=(("check_problem", False),),
-    )
-
-
-def walking_low_level_config() -> LowLevelConfig:
-    """Low-level gains of ``kd`` (measured, docs/design/walking_low_level.md).
-
-    * Swing inertial feedforward 0.75: the swing foot lands within +-0.4 cm of its aim
-      instead of 3.7-5.2 cm beyond it (flat, 0.75 m/s, dt 0.045), and the biped's solves
-      hitting j_max drop from 16 % to 0.1 % (flat, 0.5 m/s, 20 s).
-    * Trunk-yaw feedback on the stance hip yaw (kp 10 N m/rad, kd 1 N m s/rad). With the
-      feedforward alone the 20 s flat run (0.75 m/s, dt 0.045) drifted 1.85 m sideways
-      and fell at 9.6 s; with both it ran the 20 s (speed RMSE 0.010 m/s). With the
-      feet beside the CoM (LIP reference) sagittal forces yaw the trunk (rms 0.35 rad
-      on flat without the feedback, 0.10 rad with it).
-    """
-    return LowLevelConfig(
-        swing_accel_ff=0.75, stance_yaw_kp_nm_per_rad=10.0, stance_yaw_kd_nms_per_rad=1.0
-    )
-
-
-#: Time constant of the lateral return to the commanded path [s] (KDWalkConfig and
-#: ``--preview``; chosen on the built-in stepping stones, docs/design/lateral_return.md).
-LATERAL_RETURN_TIME_S = 0.7
-
-
-@dataclass(frozen=True)
-class KDWalkConfig:
-    """Settings of the kino-dynamic walking controller."""
-
-    replan_period_s: float = 0.02
-    replan_j_max: int = 50
-    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
-    sequential: SequentialConfig = field(
-        default_factory=lambda: SequentialConfig(kd=walking_kd_config())
-    )
-    low_level: LowLevelConfig = field(default_factory=walking_low_level_config)
-    swing: SwingConfig = field(
-        default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
-    )
-    # Clamp of the CoM path correction [m]; 0 turns it off. Measured (flat, 0.75 m/s, 20 s):
-    # with 0.05 m the robot fell at 17.2 s; without it, no fall but 1.1 m lateral drift.
-    max_path_error_m: float = 0.0
-    # Eq. 24 boxes shrink by this inside each patch: the whole foot (toe and heel 0.075 m
-    # from its centre) on the patch, plus 5 mm for the landing error (within +-4 mm with
-    # the swing feedforward). With 0.05 the heel or toe overhung an edge and the foot
-    # slid off it during stance (gap at dt 0.045 / 0.055 / 0.065: 1 violation each).
-    foothold_margin_m: float = 0.08
-    foothold_reach_m: float = 0.2  # |x_foot - x_com| at touchdown that selects a patch
-    touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
-    # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
-    # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
-    # with feet at +-lip_half_width_m beside a centre line (see _lip_reference). "line"
-    # plans a near-tightrope (feet 2-7 cm apart); "lip" a 0.19 m wide gait, but then the
-    # feet at patch edges fail more often (docs/design/lateral_reference.md).
-    lateral_reference: str = "line"
-    lip_half_width_m: float = 0.07
-    # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
-    # None: the centre is the commanded path itself.
-    lip_anchor_max_m: float | None = None
-    # With the "line" reference: the CoM's lateral offset from the commanded path decays
-    # along the horizon with this time constant [s] (None: the line starts at the CoM and
-    # nothing pulls the robot back to its path). With the feet kept apart the robot
-    # drifts sideways without it (gap, dt 0.045: 0.62 m, then a fall); the 0.7 s value was
-    # chosen on the built-in stepping stones (docs/design/lateral_return.md).
-    lateral_return_time_s: float | None = LATERAL_RETURN_TIME_S
-    # Multi-step footstep preview (gait/preview.py): a LIP plan of the next steps chooses
-    # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
-    # reference of eq. 18. None: one-step preview (patch by reach).
-    preview: PreviewConfig | None = None
-    # Keep the feet apart (beyond the paper): a lateral-separation row per stage in the QP
-    # (KDConfig.min_foot_separation_m = RobotModel.min_foot_separation_m) and swing targets
-    # held on the swing foot's own side of the stance foot. False: the paper's QP.
-    keep_feet_apart: bool = True
-
-    def __post_init__(self) -> None:
-        if self.lateral_reference not in ("line", "lip"):
-            raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
-        tau = self.lateral_return_time_s
-        if tau is not None and not (np.isfinite(tau) and tau > 0.0):
-            raise ConfigError("lateral_return_time_s", tau, "None or a finite time > 0 s")
-
-
-def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
-    """``kd --preview``: ``base`` (default: :class:`KDWalkConfig`) with the multi-step
-    footstep preview, and a lateral return to the path (0.7 s) where ``base`` has none.
-
-    The one-foot lanes of the stepping stones need the CoM between them; without a pull
-    back to the path it drifts 0.3-0.7 m over the course and a foot cannot reach the other
-    lane (``benchmarks/results/kd_stones_rate.md``).
-    """
-    base = base or KDWalkConfig()
-    tau = base.lateral_return_time_s or LATERAL_RETURN_TIME_S
-    return replace(base, preview=PreviewConfig(), lateral_return_time_s=tau)
-
-
-def paper_walk_config(planar: bool = False) -> KDWalkConfig:
-    """``kd --preset paper``: the paper's settings, without this project's additions; the
-    file ``presets/kd-paper.toml`` lists them (Table VIII, or for a planar robot Table V
-    from ``kd-paper.planar.toml``). README "Deviations from the paper" lists what the
-    default adds."""
-    return load_preset(KDWalkConfig, "kd", "paper", planar)
-
-
-#: Named presets of ``kd`` (``gaitnet-mpc run --controller kd --preset NAME``): the files
-#: ``presets/kd-NAME.toml`` (the tuned default, the paper's settings), each a function of
-#: ``planar`` (the robot).
-KD_PRESETS = {name: partial(load_preset, KDWalkConfig, "kd", name) for name in preset_names("kd")}
-
-
-def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
-    """The terrain view ``config`` needs: the one-step preview, or with ``config.preview``
-    the multi-step one."""
-    return TerrainView(course, TerrainKnowledge(multi_step=config.preview is not None))
 
 
 class KDWalkController(WalkingBase):

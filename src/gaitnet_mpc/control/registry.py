@@ -38,7 +38,7 @@ class ControllerContext:
 def config_type(name: str) -> type | None:
     """The settings dataclass of controller ``name`` (None: it has none)."""
     if name == "kd":
-        from gaitnet_mpc.control.kd_walk import KDWalkConfig
+        from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 
         return KDWalkConfig
     if name == "srbm":
@@ -82,7 +82,7 @@ def controller_config(
     if config_file is not None:
         config = configio.apply(config, configio.read_toml(config_file), f"{config_file}: ")
     if preview and config.preview is None:
-        from gaitnet_mpc.control.kd_walk import preview_walk_config
+        from gaitnet_mpc.control.kd_walk_config import preview_walk_config
 
         config = preview_walk_config(config)
     if dt_s is not None and name == "srbm":
@@ -119,7 +119,8 @@ def _srbm(ctx: ControllerContext) -> Controller:
 
 
 def _kd(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.kd_walk import KDWalkController, walk_terrain
+    from gaitnet_mpc.control.kd_walk import KDWalkController
+    from gaitnet_mpc.control.kd_walk_config import walk_terrain
     from gaitnet_mpc.mpc.sequential import FixedDt
 
     dt_s = ctx.options.get("dt_s")

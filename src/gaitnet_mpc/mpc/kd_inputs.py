@@ -21,7 +21,7 @@ from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask
 from gaitnet_mpc.mpc.kd_iterate import KDIterate
 from gaitnet_mpc.robots.spec import FEET
 
-#: Checked foothold bounds of one foot (eq. 24): ``p_min`` (3,), ``p_max`` (3,) [m], stage mask (h,).
+#: Checked foothold bounds of one foot (eq. 24): ``p_min``, ``p_max`` (3,) [m], stage mask (h,).
 StageBox = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
@@ -140,4 +140,4 @@ def _check_foothold_bounds(
     return tuple(bounds)
 
 
-__all__ = ["StageBox", "KDInputs"]
+__all__ = ["KDInputs", "StageBox"]

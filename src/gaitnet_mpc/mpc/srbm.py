@@ -249,8 +249,8 @@ class SRBMMPC:
             su_z[:, z0 : z0 + e.shape[1]] = su[:, col : col + NU_FOOT] @ e
         q_su = np.empty_like(su_z)  # Q Su T, Q block-diagonal with one block per stage
         for k in range(h):
-            rows = slice(NX * k, NX * k + NX)
-            q_su[rows] = self.stage_weight(float(x_ref[k + 1, 2])) @ su_z[rows]
+            stage_rows = slice(NX * k, NX * k + NX)
+            q_su[stage_rows] = self.stage_weight(float(x_ref[k + 1, 2])) @ su_z[stage_rows]
         # einsum instead of BLAS: on a loaded machine a multi-threaded BLAS call on these
         # small matrices can stall for tens of milliseconds.
         hess = np.einsum("ki,kj->ij", su_z, q_su, optimize=False)
@@ -265,7 +265,9 @@ class SRBMMPC:
                     if contact[k, i]:
                         u_ref[NU * k + NU_FOOT * i + 2] = self.mass_kg * GRAVITY_MPS2 / n_stance[k]
             grad -= r_basis.T @ u_ref
-        rows, lo, hi = [], [], []
+        rows: list[np.ndarray] = []
+        lo: list[np.ndarray] = []
+        hi: list[np.ndarray] = []
         for _, _, z0, (e, cz, l_, u_) in blocks:
             if cz.shape[0] == 0:
                 continue
@@ -281,8 +283,8 @@ class SRBMMPC:
         else:
             limits = list(torque_limits)
         for i, mask, j_t, tau_max in limits:
-            for k in np.flatnonzero(mask):
-                row = j_t @ basis[NU * k + NU_FOOT * i : NU * k + NU_FOOT * (i + 1)]
+            for stage in np.flatnonzero(mask):
+                row = j_t @ basis[NU * stage + NU_FOOT * i : NU * stage + NU_FOOT * (i + 1)]
                 if not np.any(row):
                     continue  # the foot swings in this stage
                 rows.append(row)
