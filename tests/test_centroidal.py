@@ -19,13 +19,6 @@ from gaitnet_mpc.kinematics.centroidal import (
 )
 from gaitnet_mpc.robots import RobotModel, load_robot
 
-ROBOTS = ["humanoid3d", "biped2d"]
-
-
-@pytest.fixture(scope="module", params=ROBOTS)
-def robot(request: pytest.FixtureRequest) -> RobotModel:
-    return load_robot(request.param)
-
 
 def _random_state(robot: RobotModel, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Random MuJoCo (qpos, qvel) with joints inside their limits."""

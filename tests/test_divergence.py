@@ -10,17 +10,11 @@ import pytest
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.stand import StandController
-from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator
 from gaitnet_mpc.terrain import load_course
 
 INJECT_AT_S = 0.2
-
-
-@pytest.fixture(scope="module")
-def humanoid():
-    return load_robot("humanoid3d")
 
 
 @pytest.fixture(autouse=True)

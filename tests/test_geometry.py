@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from gaitnet_mpc.geometry import heading_axes, rot2, skew, wrap_angle
+from gaitnet_mpc.geometry import heading_axes, rot2, rotate2, skew, to_heading2, wrap_angle
 
 
 def test_skew_is_the_cross_product() -> None:
@@ -34,3 +34,13 @@ def test_wrap_angle_maps_into_minus_pi_pi() -> None:
     np.testing.assert_allclose(np.cos(w), np.cos(a), atol=1e-12)
     np.testing.assert_allclose(np.sin(w), np.sin(a), atol=1e-12)
     assert float(wrap_angle(math.pi + 0.1)) == pytest.approx(-math.pi + 0.1)
+
+
+def test_rotate2_and_to_heading2_are_inverse_rotations() -> None:
+    rng = np.random.default_rng(1)
+    for yaw in rng.uniform(-4.0, 4.0, 10):
+        v = rng.normal(size=2)
+        np.testing.assert_allclose(rotate2(yaw, v), rot2(yaw) @ v, atol=1e-12)
+        np.testing.assert_allclose(to_heading2(yaw, rotate2(yaw, v)), v, atol=1e-12)
+    # the heading's forward axis, seen from the heading frame, is (1, 0)
+    np.testing.assert_allclose(to_heading2(0.7, heading_axes(0.7)[0]), [1.0, 0.0], atol=1e-12)

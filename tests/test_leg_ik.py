@@ -24,16 +24,6 @@ ROT_TOL = 1e-9
 MAX_TILT_RAD = 0.3
 
 
-@pytest.fixture(scope="module")
-def humanoid() -> RobotModel:
-    return load_robot("humanoid3d")
-
-
-@pytest.fixture(scope="module")
-def biped() -> RobotModel:
-    return load_robot("biped2d")
-
-
 # ----------------------------------------------------------------------- helpers
 def _pin_q(
     robot: RobotModel, p_base: np.ndarray, rot_base: np.ndarray, joints: np.ndarray

@@ -8,12 +8,7 @@ import pinocchio as pin
 import pytest
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.robots import ROBOTS, RobotModel, load_robot
-
-
-@pytest.fixture(scope="module", params=sorted(ROBOTS))
-def robot(request: pytest.FixtureRequest) -> RobotModel:
-    return load_robot(request.param)
+from gaitnet_mpc.robots import RobotModel, load_robot
 
 
 def test_unknown_robot_names_choices() -> None:

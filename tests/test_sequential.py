@@ -13,15 +13,10 @@ from gaitnet_mpc.control.kd_walk_config import walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.sequential import FixedDt
-from gaitnet_mpc.robots import FEET, load_robot
+from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.episode import run_episode
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
-
-
-@pytest.fixture(scope="module")
-def humanoid():
-    return load_robot("humanoid3d")
 
 
 def _first_plan(robot, course, command):

@@ -15,11 +15,6 @@ from gaitnet_mpc.terrain import load_course
 GRAVITY = 9.81
 
 
-@pytest.fixture(scope="module")
-def humanoid():
-    return load_robot("humanoid3d")
-
-
 def _run(sim: Simulator, controller, seconds: float) -> None:
     controller.reset(sim.state())
     for _ in range(round(seconds / sim.config.timestep_s)):

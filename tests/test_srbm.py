@@ -8,13 +8,12 @@ import pytest
 from gaitnet_mpc.control.srbm_walk import centroidal_inertia_body
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.mpc.srbm import NU, NX, SRBMMPC
-from gaitnet_mpc.robots import load_robot
+from gaitnet_mpc.robots import RobotModel, load_robot
 
 
 @pytest.fixture(scope="module")
-def mpc() -> SRBMMPC:
-    robot = load_robot("humanoid3d")
-    return SRBMMPC(robot.total_mass_kg, centroidal_inertia_body(robot), 0.075, 0.075)
+def mpc(humanoid: RobotModel) -> SRBMMPC:
+    return SRBMMPC(humanoid.total_mass_kg, centroidal_inertia_body(humanoid), 0.075, 0.075)
 
 
 def _horizon(h: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

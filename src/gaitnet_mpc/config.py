@@ -29,7 +29,7 @@ import typing
 from dataclasses import fields, is_dataclass, replace
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import tomli_w
 
@@ -138,7 +138,7 @@ def _convert(tp: Any, raw: Any, current: Any, key: str) -> Any:
         if raw == NONE:
             return None
         if is_dataclass(inner) and current is None:
-            current = inner()
+            current = cast(type, inner)()  # a class: an argument of a type hint
         return _convert(inner, raw, current, key)
     if is_dataclass(tp):
         return _merge(current, raw, key + ".")
@@ -206,7 +206,7 @@ def _all_keys(cls: type, prefix: str) -> list[str]:
         out.append(prefix + f.name)
         for t in (hints[f.name], *typing.get_args(hints[f.name])):
             if is_dataclass(t):
-                out += _all_keys(t, f"{prefix}{f.name}.")
+                out += _all_keys(cast(type, t), f"{prefix}{f.name}.")  # a hint: a class
     return out
 
 

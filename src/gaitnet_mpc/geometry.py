@@ -33,6 +33,20 @@ def heading_axes(yaw_rad: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array([c, s]), np.array([-s, c])
 
 
+def rotate2(yaw_rad: float, v_xy: ArrayLike) -> np.ndarray:
+    """(2,) ``R(yaw) v``: a horizontal vector given in the heading frame, in the world."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    x, y = v_xy
+    return np.array([c * x - s * y, s * x + c * y])
+
+
+def to_heading2(yaw_rad: float, v_xy: ArrayLike) -> np.ndarray:
+    """(2,) ``R(yaw)^T v``: a horizontal world vector in the heading frame of ``yaw_rad``."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    x, y = v_xy
+    return np.array([c * x + s * y, -s * x + c * y])
+
+
 def wrap_angle(angle_rad: ArrayLike) -> np.ndarray:
     """Angle(s) wrapped to ``(-pi, pi]`` (``atan2(sin a, cos a)``, elementwise)."""
     a = np.asarray(angle_rad, dtype=float)

@@ -31,6 +31,7 @@ from gaitnet_mpc.gait import (
 )
 from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
 from gaitnet_mpc.gait.preview import PreviewPlan, plan_preview
+from gaitnet_mpc.geometry import heading_axes, rotate2
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.sequential import (
     CoMReference,
@@ -148,9 +149,7 @@ class KDWalkController(WalkingBase):
         c = self.command
         travel = self.profile.ramp_integral_s(t_s - self.t0_s)
         yaw = self.profile.heading_rad(t_s)
-        cy, sy = np.cos(yaw), np.sin(yaw)
-        step = travel * np.array([cy * c.vx_mps - sy * c.vy_mps, sy * c.vx_mps + cy * c.vy_mps])
-        return self.com0[:2] + step
+        return self.com0[:2] + travel * rotate2(yaw, (c.vx_mps, c.vy_mps))
 
     def _path_start(self, state: RobotState) -> np.ndarray:
         """Start of the reference CoM path: the measured CoM moved toward the commanded
@@ -231,8 +230,7 @@ class KDWalkController(WalkingBase):
         y_off, v_off = lip_sway_orbit(side[kk], self.config.lip_half_width_m, w, tau, T)
         # centre line: commanded path, lateral offset from the measured CoM
         yaw = self.profile.heading_rad(state.t_s)
-        e_x = np.array([np.cos(yaw), np.sin(yaw)])
-        e_y = np.array([-np.sin(yaw), np.cos(yaw)])
+        e_x, e_y = heading_axes(yaw)
         lat = float(e_y @ (self._commanded_path_xy(state.t_s) - state.com_world_m[:2]))
         lim = self.config.lip_anchor_max_m
         if lim is not None:
@@ -316,6 +314,7 @@ class KDWalkController(WalkingBase):
             pos, vel = self.preview.com_at(timing.times_s + (state.t_s - self._preview_t0_s))
             ref.p_m[:, 0], ref.v_mps[:, 0] = pos[:, 0], vel[:, 0]
         if line_return:
+            assert tau is not None  # line_return needs it
             y_path = float(self._commanded_path_xy(state.t_s)[1])
             err = float(state.com_world_m[1]) - y_path
             decay = np.exp(-timing.times_s / tau)
@@ -340,9 +339,8 @@ class KDWalkController(WalkingBase):
             if self.preview is not None:
                 target = self._on_preview(target, 1)
         else:
-            target = self.plan.touchdown(swing)
-            if target is None:
-                target = self._raibert(state, swing, t_left, cmd)
+            planned = self.plan.touchdown(swing)
+            target = self._raibert(state, swing, t_left, cmd) if planned is None else planned
         nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
         if self.preview is not None:
             nxt = self._on_preview(nxt, 2)
@@ -431,6 +429,7 @@ class KDWalkController(WalkingBase):
             )
         t = sched.time_in_step_s
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
+        assert self.swing is not None  # made by _start_step, which the first tick runs
         p_swing = self.swing.position(t)
         if yaw is not None and self.config.keep_feet_apart:
             p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)

@@ -22,6 +22,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,7 +74,7 @@ class LowLevelController:
         self,
         state: RobotState,
         stance_wrench: dict[str, np.ndarray],
-        swing_target: dict[str, tuple[np.ndarray, ...]],
+        swing_target: Mapping[str, tuple[np.ndarray, ...]],
         swing_yaw_rad: float | None = None,
     ) -> np.ndarray:
         """Joint torques (n_joints,).

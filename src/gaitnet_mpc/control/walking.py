@@ -65,6 +65,7 @@ from gaitnet_mpc.gait import (
     keep_beside_stance,
 )
 from gaitnet_mpc.gait.lip import lip_gains, lip_propagate
+from gaitnet_mpc.geometry import heading_axes, rotate2, to_heading2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -224,10 +225,9 @@ class WalkingController(WalkingBase):
 
     def _cmd_world(self, yaw: float, t_s: float) -> np.ndarray:
         """Commanded CoM velocity (3,) in the world at time ``t_s`` after the start."""
-        c, s = np.cos(yaw), np.sin(yaw)
         k = self.profile.ramp(t_s)
         vx, vy = k * self.command.vx_mps, k * self.command.vy_mps
-        return np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+        return np.array([*rotate2(yaw, (vx, vy)), 0.0])
 
     def _update_path(self, state: RobotState) -> None:
         """Integrate the commanded path to ``state.t_s`` and apply the anti-windup clamp."""
@@ -244,8 +244,7 @@ class WalkingController(WalkingBase):
     def _path_feedback(self, state: RobotState, yaw: float) -> np.ndarray:
         """Bounded velocity (heading frame) that steers the footholds back to the path."""
         ex, ey = self.path_xy - state.com_world_m[:2]
-        c, s_ = np.cos(yaw), np.sin(yaw)
-        err_heading = np.array([c * ex + s_ * ey, -s_ * ex + c * ey])
+        err_heading = to_heading2(yaw, (ex, ey))
         lim = self.config.max_path_feedback_mps
         return np.clip(self.config.path_gain_per_s * err_heading, -lim, lim)
 
@@ -276,12 +275,12 @@ class WalkingController(WalkingBase):
             yaw_rad=yaw,
             cmd_yaw_rate_radps=self.command.yaw_rate_radps,
         )
-        c, s_ = np.cos(yaw), np.sin(yaw)
+        e_x, _ = heading_axes(yaw)
         dx, dy = p[:2] - p_td_xy
-        fwd = c * dx + s_ * dy
+        fwd = e_x[0] * dx + e_x[1] * dy
         lim = self.config.max_reach_m
         if abs(fwd) > lim:
-            p[:2] -= (fwd - np.clip(fwd, -lim, lim)) * np.array([c, s_])
+            p[:2] -= (fwd - np.clip(fwd, -lim, lim)) * e_x
         p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m - self.config.touchdown_depth_m
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]

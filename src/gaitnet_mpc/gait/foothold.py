@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.geometry import heading_axes, rot2
 from gaitnet_mpc.robots.spec import FEET
 
 __all__ = ["RaibertConfig", "RaibertHeuristic", "keep_beside_stance"]
@@ -55,12 +56,6 @@ def _vec(value: ArrayLike, field: str, sizes: tuple[int, ...]) -> np.ndarray:
     if v.ndim != 1 or v.shape[0] not in sizes or not np.all(np.isfinite(v)):
         raise ConfigError(field, value, f"a finite vector of length {sizes}")
     return v
-
-
-def _rot2(yaw_rad: float) -> np.ndarray:
-    """(2, 2) rotation of the horizontal plane by ``yaw_rad``."""
-    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-    return np.array([[c, -s], [s, c]])
 
 
 @dataclass(frozen=True)
@@ -128,7 +123,7 @@ class RaibertHeuristic:
         side = 1.0 if foot == "left" else -1.0
         off = np.array([self.config.hip_forward_offset_m, side * self.config.hip_lateral_offset_m])
         out = p_com.copy()
-        out[:2] += _rot2(_finite(yaw_rad, "yaw_rad")) @ off
+        out[:2] += rot2(_finite(yaw_rad, "yaw_rad")) @ off
         return out
 
     def foothold(
@@ -176,7 +171,7 @@ class RaibertHeuristic:
         omega = _finite(cmd_yaw_rate_radps, "cmd_yaw_rate_radps")
 
         yaw_td = yaw + omega * t_td  # predicted heading at touchdown [rad]
-        v_cmd = _rot2(yaw) @ v_cmd_heading  # (2,) commanded velocity, world [m/s]
+        v_cmd = rot2(yaw) @ v_cmd_heading  # (2,) commanded velocity, world [m/s]
         if p_hip_world_m is None:
             hip_td = self.hip_world_m(foot, p_com, yaw_td)[:2] + v_cmd * t_td  # (2,)
         else:
@@ -195,7 +190,7 @@ class RaibertHeuristic:
         p_xy = hip_td + 0.5 * t_stance * v_com + k_v * (v_com - v_cmd) + turn  # (2,)
 
         # Clip relative to the stance foot in the heading frame at touchdown.
-        rot = _rot2(yaw_td)
+        rot = rot2(yaw_td)
         d = rot.T @ (p_xy - p_stance[:2])  # (2,) (forward, left)
         side = 1.0 if foot == "left" else -1.0
         d[0] = np.clip(d[0], -cfg.max_step_m, cfg.max_step_m)
@@ -222,7 +217,7 @@ def keep_beside_stance(
     if min_separation_m is None:
         return p_world_m
     side = 1.0 if foot == "left" else -1.0
-    n_y = np.array([-math.sin(yaw_rad), math.cos(yaw_rad)])
+    _, n_y = heading_axes(yaw_rad)
     lateral = side * float(n_y @ (p_world_m[:2] - p_stance_world_m[:2]))
     if lateral >= min_separation_m:
         return p_world_m

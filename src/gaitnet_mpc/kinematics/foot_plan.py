@@ -17,7 +17,6 @@ two with the same minimum-jerk phase. These are the IK targets ``p_f^ref`` of Al
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +24,7 @@ import numpy as np
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.swing import min_jerk, swing_profile
 from gaitnet_mpc.gait.timing import ReferenceTiming
-from gaitnet_mpc.geometry import wrap_angle
+from gaitnet_mpc.geometry import heading_axes, rotate2, wrap_angle
 from gaitnet_mpc.robots.spec import FEET
 
 __all__ = [
@@ -147,10 +146,10 @@ def neutral_foothold(
     t_td = np.array([swing.t_touchdown_s])
     p_c = p_com_start_m[:2] + heading_displacement(v_cmd_mps, yaw0_rad, yaw_rate_radps, t_td)[0]
     yaw_td = yaw0_rad + yaw_rate_radps * swing.t_touchdown_s
-    c, s = math.cos(yaw_td), math.sin(yaw_td)
-    v_world = np.array([c * v_cmd_mps[0] - s * v_cmd_mps[1], s * v_cmd_mps[0] + c * v_cmd_mps[1]])
+    v_world = rotate2(yaw_td, v_cmd_mps)
+    _, e_y = heading_axes(yaw_td)
     out = previous_m.copy()
-    out[:2] = p_c + np.array([-s * lateral_m, c * lateral_m]) + 0.5 * t_step_s * v_world
+    out[:2] = p_c + e_y * lateral_m + 0.5 * t_step_s * v_world
     if planar:
         out[1] = previous_m[1]
     return out

@@ -72,7 +72,7 @@ def _is_number(value: object) -> bool:
 
 
 def _positive(value: object) -> bool:
-    return _is_number(value) and math.isfinite(value) and value > 0.0  # type: ignore[arg-type]
+    return _is_number(value) and math.isfinite(value) and value > 0.0  # type: ignore[arg-type, operator]
 
 
 # --------------------------------------------------------------------------- workspace

@@ -438,6 +438,7 @@ class KDSubproblem:
         """
         problem = self.build(iterate, inputs)
         sol = self.workspace.solve_or_raise(problem)
+        assert sol.x is not None  # found, so given
         parts = self.layout.unpack(sol.x)
         parts["delta_p_com"][0] = 0.0
         return KDStep(

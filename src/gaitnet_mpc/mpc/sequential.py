@@ -192,7 +192,7 @@ class SequentialResult:
     def stage_at(self, t_s: float) -> int:
         """Index of the plan's stage that contains time ``t_s`` (clamped)."""
         boundaries = self.t_plan_s + np.cumsum(self.dts_s)
-        return int(min(np.searchsorted(boundaries, t_s, side="right"), len(self.dts_s) - 1))
+        return min(int(np.searchsorted(boundaries, t_s, side="right")), len(self.dts_s) - 1)
 
     def touchdown(self, foot: str) -> np.ndarray | None:
         """(3,) planned touchdown of ``foot``: its position in its next stance stage."""

@@ -113,6 +113,7 @@ class ClarabelWorkspace(QPWorkspace):
         n = problem.n
         cones = _ConeBuilder(n)
         if problem.A_eq is not None:
+            assert problem.b_eq is not None  # given together (QPProblem.__post_init__)
             cones.eq_rows.append(problem.A_eq)
             cones.eq_rhs.append(problem.b_eq)
         if problem.A is not None:

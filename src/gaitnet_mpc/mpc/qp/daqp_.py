@@ -104,6 +104,7 @@ class DAQPWorkspace(QPWorkspace):
             lowers.append(lb)
             senses.append(np.where(lb == ub, _SENSE_EQUALITY, 0).astype(np.int32))
         if problem.A_eq is not None:
+            assert problem.b_eq is not None  # given together (QPProblem.__post_init__)
             rows.append(problem.A_eq)
             uppers.append(problem.b_eq)
             lowers.append(problem.b_eq)

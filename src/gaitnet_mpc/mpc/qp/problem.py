@@ -228,6 +228,7 @@ class QPProblem:
         lows: list[np.ndarray] = []
         ups: list[np.ndarray] = []
         if self.A_eq is not None:
+            assert self.b_eq is not None  # given together (__post_init__)
             blocks.append(self.A_eq)
             lows.append(self.b_eq)
             ups.append(self.b_eq)
@@ -262,7 +263,7 @@ class QPProblem:
             else:
                 arrays[f.name] = value
         with Path(path).open("wb") as fh:  # a handle keeps numpy from appending ".npz"
-            np.savez(fh, **arrays)
+            np.savez(fh, **arrays)  # type: ignore[arg-type]  # stubs: **kwds may hit allow_pickle
 
     @classmethod
     def load_npz(cls, path: str | PathLike[str]) -> QPProblem:

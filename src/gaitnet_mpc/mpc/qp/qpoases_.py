@@ -36,7 +36,7 @@ from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 try:
     import casadi
 except ImportError as _exc:  # pragma: no cover - depends on the environment
-    casadi = None
+    casadi = None  # type: ignore[assignment]  # None marks the missing optional module
     _IMPORT_ERROR: str | None = repr(_exc)
 else:
     _IMPORT_ERROR = None
@@ -130,6 +130,7 @@ class QpoasesWorkspace(QPWorkspace):
         P = problem.P
 
         p_pat, a_pat = SparsityPattern.of(P), SparsityPattern.of(A)
+        assert p_pat is not None and a_pat is not None  # of matrices, not None
         if self.options["cold_start"]:
             self._invalidate_structure()
         if self._structure_changed((p_pat, a_pat)) or self._conic is None:

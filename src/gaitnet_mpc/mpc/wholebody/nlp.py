@@ -187,7 +187,11 @@ class WholeBodyMPC:
             for fi, foot in enumerate(FEET):
                 pts = d.contact_points_of(foot)
                 if not key[k][fi]:
-                    continue  # zero swing forces are variable bounds (FATROP: no g = u rows)
+                    # Zero swing force: a fixed variable for IPOPT (treated as a parameter),
+                    # path rows for FATROP (its interior point has no fixed-variable mode).
+                    if self.solver_name == "fatrop":
+                        add(ca.vertcat(*[lam[self.nf * i : self.nf * (i + 1)] for i in pts]), 0, 0)
+                    continue
                 for i in pts:
                     fz = f_world[3 * i + 2]
                     for a in tangent:
@@ -290,7 +294,8 @@ class WholeBodyMPC:
                 for i in pts:
                     sl = slice(o_f + self.nf * i, o_f + self.nf * (i + 1))
                     if not key[k][fi]:
-                        lbx[sl], ubx[sl] = 0.0, 0.0
+                        if self.solver_name != "fatrop":
+                            lbx[sl], ubx[sl] = 0.0, 0.0
                     elif len(pts) == 1:
                         lbx[sl.stop - 1], ubx[sl.stop - 1] = cfg.f_min_n, cfg.f_max_n
                     else:
