@@ -228,6 +228,7 @@ class WholeBodyMPC:
                     "ipopt.sb": "yes",
                     "ipopt.tol": 1e-6,
                     "ipopt.acceptable_tol": 1e-4,
+                    "ipopt.acceptable_iter": 5,
                     "ipopt.max_iter": 200,
                     "ipopt.linear_solver": "mumps",
                 }
@@ -244,6 +245,8 @@ class WholeBodyMPC:
                     "fatrop.print_level": 0,
                     "fatrop.max_iter": 200,
                     "fatrop.tol": 1e-6,
+                    "fatrop.tol_acceptable": 1e-4,
+                    "fatrop.acceptable_iter": 5,
                 }
             )
         opts.update(self.solver_options)
