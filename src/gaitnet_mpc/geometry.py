@@ -8,6 +8,7 @@ counter-clockwise seen from above; angles in rad, lengths in m.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -33,14 +34,14 @@ def heading_axes(yaw_rad: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array([c, s]), np.array([-s, c])
 
 
-def rotate2(yaw_rad: float, v_xy: ArrayLike) -> np.ndarray:
+def rotate2(yaw_rad: float, v_xy: Sequence[float] | np.ndarray) -> np.ndarray:
     """(2,) ``R(yaw) v``: a horizontal vector given in the heading frame, in the world."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     x, y = v_xy
     return np.array([c * x - s * y, s * x + c * y])
 
 
-def to_heading2(yaw_rad: float, v_xy: ArrayLike) -> np.ndarray:
+def to_heading2(yaw_rad: float, v_xy: Sequence[float] | np.ndarray) -> np.ndarray:
     """(2,) ``R(yaw)^T v``: a horizontal world vector in the heading frame of ``yaw_rad``."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     x, y = v_xy

@@ -150,6 +150,7 @@ def run_episode(
             log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
             sim.step(tau)
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
+                assert writer is not None  # made together with the renderer
                 t_r = time.perf_counter()
                 renderer.update_scene(sim.data, camera="track")
                 _draw_footholds(renderer.scene, controller.planned_footholds(), foot_r)
