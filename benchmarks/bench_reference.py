@@ -9,14 +9,12 @@ interleaved (A B C A B C ...) so that their ratios hold on a shared, noisy machi
 from __future__ import annotations
 
 import os
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig
 from gaitnet_mpc.kinematics import leg_geometries, whole_body_ik
 from gaitnet_mpc.kinematics.reference import (

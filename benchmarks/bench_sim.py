@@ -6,13 +6,11 @@ a shared, noisy machine. Run: ``.venv/bin/python benchmarks/bench_sim.py``.
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
 from gaitnet_mpc.control.stand import StandController
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.simulator import Simulator

@@ -8,11 +8,9 @@ process pool (``--jobs``, default 2). Run: ``.venv/bin/python benchmarks/kd_runs
 from __future__ import annotations
 
 import argparse
-import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
 
 # (label, robot, course, vx [m/s], fixed dt [s], duration [s], multi-step preview)

@@ -26,7 +26,6 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
 
 #: Configurations: name -> multi-step preview on (the gap is run without it only).

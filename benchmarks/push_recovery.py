@@ -34,7 +34,6 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
 
 RESULTS = Path(__file__).parent / "results" / "push_recovery.md"

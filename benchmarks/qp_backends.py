@@ -2,7 +2,7 @@
 
 Run::
 
-    cd /work/main && .venv/bin/python benchmarks/qp_backends.py    # ~1.5 min, 2 cores
+    .venv/bin/python benchmarks/qp_backends.py    # ~1.5 min, 2 cores
     .venv/bin/python benchmarks/qp_backends.py --seconds 4 --passes 5
 
 What it measures:
@@ -43,7 +43,6 @@ from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.srbm_walk import SRBMWalkController
 from gaitnet_mpc.control.terrain_view import TerrainView

@@ -27,7 +27,6 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
 from machine import machine_info
 
 RESULTS = Path(__file__).parent / "results" / "srbm_runs.md"

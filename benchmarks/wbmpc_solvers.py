@@ -7,10 +7,13 @@ support, a step every h' = 5 stages, dt = 0.05 / 0.06 s for the current / next s
   velocities (0.1 rad/s), solved from :meth:`WholeBodyMPC.cold_start`;
 * warm: a receding-horizon sequence on the model itself: each call's measured state is the
   previous solution's node 1 plus the same kind of noise, the gait phase advances one
-  stage, and the previous solution shifted by one stage is the initial guess.
+  stage, and the previous solution shifted by one stage (primal variables and duals,
+  :meth:`WholeBodyMPC.shift`) is the initial guess, solved with the warm-start settings
+  (:data:`gaitnet_mpc.mpc.wholebody.nlp.WARM_OPTIONS`: small initial barrier parameter).
 
-The first call of every contact schedule builds and caches the transcription; the build
-time is reported apart and excluded from the solve times.
+Every solver (one per contact schedule, cold or warm settings) is built before the timed
+calls; the build time is reported apart. Wall and CPU (process) time are both reported:
+the machine is shared, and the wall time of a single-threaded solve grows with the load.
 
 Usage: ``python benchmarks/wbmpc_solvers.py [--quick]`` -> ``benchmarks/results/wbmpc.md``.
 """
@@ -37,14 +40,16 @@ RESULTS = Path(__file__).parent / "results" / "wbmpc.md"
 @dataclass
 class Stats:
     times_s: list[float]
+    cpu_s: list[float]
     iterations: list[int]
     violations: list[float]
     failures: int
 
     def row(self) -> str:
-        t = np.array(self.times_s) * 1e3
+        t, c = np.array(self.times_s) * 1e3, np.array(self.cpu_s) * 1e3
         return (
             f"{len(t)} | {np.median(t):.0f} | {np.percentile(t, 99):.0f} | "
+            f"{np.median(c):.0f} | {np.percentile(c, 99):.0f} | "
             f"{np.median(self.iterations):.0f} ({max(self.iterations)}) | "
             f"{max(self.violations):.1e} | {self.failures}"
         )
@@ -80,46 +85,45 @@ def _problem(robot, cfg, qpos, qvel, walking: bool, call: int):
     )
 
 
-def _record(stats: Stats, sol: WBSolution) -> None:
+def _record(stats: Stats, sol: WBSolution, cpu_s: float) -> None:
     stats.times_s.append(sol.solve_time_s)
+    stats.cpu_s.append(cpu_s)
     stats.iterations.append(sol.iterations)
     stats.violations.append(sol.constraint_violation)
     stats.failures += int(not sol.success)
 
 
-def run_case(robot: RobotModel, solver: str, walking: bool, n_cold: int, n_warm: int) -> dict:
+def run_case(robot: RobotModel, variant: str, walking: bool, n_cold: int, n_warm: int) -> dict:
+    """``variant`` is a solver name, or ``name:N`` for that solver capped at N iterations."""
     cfg = WBConfig()
-    mpc = WholeBodyMPC(robot, cfg, solver=solver)
+    solver, _, cap = variant.partition(":")
+    options = {f"{solver}.max_iter": int(cap)} if cap else {}
+    mpc = WholeBodyMPC(robot, cfg, solver=solver, solver_options=options)
     rng = np.random.default_rng(0)
     q_nom, v_zero = robot.standing_qpos(), np.zeros(robot.nv)
-    builds: list[float] = []
+    # Build every solver the calls will use first, so that no solve time includes a build.
+    builds = [mpc.prepare(_problem(robot, cfg, q_nom, v_zero, walking, 0))]
+    for call in range(1, n_warm + 1 if walking else 2):
+        built = mpc.prepare(_problem(robot, cfg, q_nom, v_zero, walking, call), warm=True)
+        builds += [built] if built > 0.0 else []
 
-    def solve(problem, warm=None) -> WBSolution:
-        n_built = len(mpc._cache)
+    def solve(problem, warm=None) -> tuple[WBSolution, float]:
+        cpu0 = time.process_time()
         sol = mpc.solve(problem, warm_start=warm)
-        if len(mpc._cache) > n_built:
-            builds.append(mpc.last_build_time_s)
-        return sol
+        return sol, time.process_time() - cpu0
 
-    # Build every schedule the warm sequence will meet, so no solve time includes a build.
-    for call in range(n_warm + 1 if walking else 1):
-        problem = _problem(robot, cfg, q_nom, v_zero, walking, call)
-        if problem.schedule_key not in mpc._cache:
-            t0 = time.perf_counter()
-            mpc._cache[problem.schedule_key] = mpc._build(problem.schedule_key)
-            builds.append(time.perf_counter() - t0)
-    cold = Stats([], [], [], 0)
+    cold = Stats([], [], [], [], 0)
     for _ in range(n_cold):
         qpos, qvel = _noisy(robot, q_nom, v_zero, rng)
-        _record(cold, solve(_problem(robot, cfg, qpos, qvel, walking, 0)))
-    warm = Stats([], [], [], 0)
-    sol = solve(_problem(robot, cfg, q_nom, v_zero, walking, 0))
+        _record(cold, *solve(_problem(robot, cfg, qpos, qvel, walking, 0)))
+    warm = Stats([], [], [], [], 0)
+    sol, _ = solve(_problem(robot, cfg, q_nom, v_zero, walking, 0))
     for call in range(1, n_warm + 1):
         qpos, qvel = _noisy(robot, sol.qpos[1], sol.qvel[1], rng)
         if not robot.spec.planar:
             qpos[3:7] /= np.linalg.norm(qpos[3:7])
-        sol = solve(_problem(robot, cfg, qpos, qvel, walking, call), mpc.shift(sol))
-        _record(warm, sol)
+        sol, cpu = solve(_problem(robot, cfg, qpos, qvel, walking, call), mpc.shift(sol))
+        _record(warm, sol, cpu)
     return {"cold": cold, "warm": warm, "builds": builds, "n_var": mpc.n_variables()}
 
 
@@ -127,7 +131,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="3 cold, 5 warm solves per case")
     parser.add_argument("--robots", nargs="+", default=["biped2d", "humanoid3d"])
-    parser.add_argument("--solvers", nargs="+", default=["ipopt", "fatrop"])
+    parser.add_argument(
+        "--solvers",
+        nargs="+",
+        default=["ipopt", "fatrop", "ipopt:5", "fatrop:5"],
+        help="solver names; name:N caps the iterations at N (a real-time-iteration budget)",
+    )
     args = parser.parse_args()
     n_cold, n_warm = (3, 5) if args.quick else (10, 20)
     lines = [
@@ -141,11 +150,15 @@ def main() -> None:
         "h = 10 stages, Table VI weights and limits, IPOPT (MUMPS) and FATROP through CasADi "
         "3.8.2 with exact Hessians of the expanded SX graph, tolerance 1e-6. Times in ms; "
         "p99 of few samples is close to the maximum; iterations: median (max); violation: "
-        "max over the solves of the largest bound/constraint violation.",
+        "max over the solves of the largest bound/constraint violation. `name:5` rows cap "
+        "the solver at 5 iterations (a fixed real-time budget): their 'failed' column counts "
+        "the solves stopped before convergence, and the violation says how far from "
+        "feasible the returned point is.",
         "",
-        "| robot | problem | solver | vars | build [s] | start | n | median [ms] | p99 [ms] "
-        "| iterations | violation | failed |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| robot | problem | solver | vars | build [s] | start | n | wall median [ms] "
+        "| wall p99 [ms] | CPU median [ms] | CPU p99 [ms] | iterations | violation | failed "
+        "| load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name in args.robots:
         robot = load_robot(name)
@@ -157,7 +170,7 @@ def main() -> None:
                 for start in ("cold", "warm"):
                     lines.append(
                         f"| {name} | {label} | {solver} | {res['n_var']} | {build} | {start} | "
-                        f"{res[start].row()} |"
+                        f"{res[start].row()} | {os.getloadavg()[0]:.1f} |"
                     )
                 print(lines[-2], lines[-1], sep="\n", flush=True)
     RESULTS.write_text("\n".join(lines) + "\n")
