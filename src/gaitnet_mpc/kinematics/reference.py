@@ -1,5 +1,8 @@
 """Joint-space reference trajectories over the MPC horizon and their centroidal maps.
 
+(Over 500 lines because of this docstring, the reference motion's specification; the
+data types are in :mod:`~gaitnet_mpc.kinematics.reference_workspace`.)
+
 This module implements Algorithm 1's ``f_ref`` (lines 2-3) and ``f_IK`` (line 9):
 
 * :func:`make_reference` (``f_ref``): from the measured configuration, the user command and
