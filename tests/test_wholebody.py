@@ -239,3 +239,24 @@ def test_validation_errors() -> None:
     truncated = type(sol)(**{**sol.__dict__, "x_opt": sol.x_opt[:-1]})
     with pytest.raises(ConfigError, match="warm_start"):
         mpc.solve(problem, warm_start=truncated)
+
+
+def test_shifted_warm_start_solves_the_next_call() -> None:
+    """Receding horizon: the shifted solution (primal and duals) seeds the next phase."""
+    robot = load_robot("biped2d")
+    mpc = WholeBodyMPC(robot, solver="ipopt")
+    q0 = robot.standing_qpos()
+
+    def problem(qpos: np.ndarray, qvel: np.ndarray, phase: int):
+        return make_problem(
+            mpc.config, qpos, qvel, q0, Command(vx_mps=0.3), planar=True,
+            step_dt_s=(0.05, 0.06), phase_stage=phase, stance_foot="left",
+        )  # fmt: skip
+
+    first = mpc.solve(problem(q0, np.zeros(robot.nv), 0))
+    warm = mpc.shift(first)
+    assert len(warm.lam_blocks) == 2 * mpc.horizon_stages + 1
+    np.testing.assert_allclose(warm.x_opt[: mpc.nx], first.x_opt[mpc.nx + mpc.nu :][: mpc.nx])
+    nxt = problem(first.qpos[1], first.qvel[1], 1)
+    second = mpc.solve(nxt, warm_start=warm)
+    _check_solution(mpc, nxt, second)

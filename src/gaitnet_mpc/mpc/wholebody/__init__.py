@@ -4,11 +4,12 @@
   semi-implicit Euler step, on MuJoCo's state convention.
 * :mod:`.problem`: :class:`WBConfig` (Table VI), :class:`WBProblem` and the contact
   schedule / per-step sampling times / reference builders.
-* :mod:`.nlp`: :class:`WholeBodyMPC`, the multiple-shooting NLP solved by IPOPT or FATROP.
+* :mod:`.nlp`: :class:`WholeBodyMPC`, the multiple-shooting NLP and its warm start.
+* :mod:`.solvers`: IPOPT / FATROP settings; :mod:`.solution`: :class:`WBSolution`.
 """
 
 from gaitnet_mpc.mpc.wholebody.dynamics import ContactPoint, WholeBodyDynamics
-from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS, WBSolution, WholeBodyMPC
+from gaitnet_mpc.mpc.wholebody.nlp import WholeBodyMPC
 from gaitnet_mpc.mpc.wholebody.problem import (
     WBConfig,
     WBProblem,
@@ -17,6 +18,8 @@ from gaitnet_mpc.mpc.wholebody.problem import (
     make_problem,
     stage_dt,
 )
+from gaitnet_mpc.mpc.wholebody.solution import WBSolution
+from gaitnet_mpc.mpc.wholebody.solvers import SOLVERS
 
 __all__ = [
     "SOLVERS",

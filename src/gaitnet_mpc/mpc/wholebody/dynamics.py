@@ -23,6 +23,7 @@ semi-implicit Euler, exactly MuJoCo's ``Euler`` integrator (without implicit dam
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -33,6 +34,8 @@ from gaitnet_mpc.robots.spec import FEET
 GRAVITY_MPS2 = 9.81
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
+# Common-subexpression elimination shrinks the RNEA graph that every stage expands.
+_FUNCTION_OPTIONS = {"cse": True}
 
 
 @dataclass(frozen=True)
@@ -243,10 +246,21 @@ class WholeBodyDynamics:
             return qpos
         return ca.vertcat(qpos[0:3], qpos[4:7], qpos[3], qpos[7:])
 
-    def _forward(self, qpos: ca.SX, v: ca.SX, a: ca.SX | None):
-        """Forward pass of the RNEA: link poses, velocities, accelerations (link frames)."""
+    def _forward(
+        self, qpos: ca.SX, v: ca.SX, a: ca.SX | None
+    ) -> tuple[list[tuple[Any, Any]], list[Any], list[Any], list[tuple[Any, Any]]]:
+        """Forward pass of the RNEA: link poses (world), spatial velocities and accelerations
+        (link frames), and each joint's transform from its parent (rotation, position)."""
         q = self._joint_q(qpos)
-        poses, vels, accs, sub = [], [], [], []
+        poses: list[tuple[Any, Any]] = []
+        vels: list[Any] = []
+        accs: list[Any] = []
+        sub: list[tuple[Any, Any]] = []
+        r_rel: Any
+        p_rel: Any
+        s_qdd: Any
+        v_par: Any
+        a_par: Any
         gravity = ca.DM([0.0, 0.0, GRAVITY_MPS2, 0.0, 0.0, 0.0])  # a_world = -g
         for link in self._links:
             rp, pp = ca.DM(link.rot_placement), ca.DM(link.pos_placement_m)
@@ -273,7 +287,8 @@ class WholeBodyDynamics:
             else:
                 par_rot, par_pos = poses[link.parent]
                 o_rot, o_pos = par_rot @ r_rel, par_pos + par_rot @ p_rel
-                v_par, a_par = vels[link.parent], accs[link.parent] if a is not None else None
+                v_par = vels[link.parent]
+                a_par = accs[link.parent] if a is not None else None
             vi = (
                 ca.vertcat(
                     r_rel.T @ (v_par[0:3] + ca.cross(v_par[3:6], p_rel)), r_rel.T @ v_par[3:6]
@@ -316,6 +331,7 @@ class WholeBodyDynamics:
             [ca.horzcat(*p_cols), ca.horzcat(*v_cols)],
             ["qpos", "qvel"],
             ["p_contact_world_m", "v_contact_world_mps"],
+            _FUNCTION_OPTIONS,
         )
 
     # ------------------------------------------------------------ dynamics
@@ -373,6 +389,7 @@ class WholeBodyDynamics:
             [tau_vec],
             ["qpos", "qvel", "qacc", "force_world_n"],
             ["tau_generalised"],
+            _FUNCTION_OPTIONS,
         )
 
     def _build_step(self) -> ca.Function:
@@ -393,6 +410,7 @@ class WholeBodyDynamics:
             [qpos_next, qvel_next],
             ["qpos", "qvel", "qacc", "dt_s"],
             ["qpos_next", "qvel_next"],
+            _FUNCTION_OPTIONS,
         )
 
     # ------------------------------------------------------------ numeric helpers

@@ -5,7 +5,7 @@ Decision variables (eq. 1), in the stage-wise order FATROP's structure detection
 ``u_k = (qacc_k, tau_j,k, lambda_k)``; the accelerations are variables so that the
 dynamics are the inverse-dynamics equality of eq. (4) (no symbolic mass-matrix solve).
 
-Constraints, per stage k in this order:
+Constraints of stage k:
 
 * k = 0: ``x_0 = x_measured``;
 * k >= 1: contact kinematics of stage k-1's contact mode on node k (3b/3c): a stance foot's
@@ -13,18 +13,22 @@ Constraints, per stage k in this order:
   zero yaw rate of a line foot: the heel's tangential velocity would repeat the toe's
   along the foot axis); a swing foot's points clear ``swing_height_min_m``;
 * eq. (4): ``ID(q_k, v_k, a_k, lambda_k) = [0; tau_k]``;
-* contact wrenches (3c): friction pyramid ``|f_t| <= mu f_z`` and ``f_z >= 0`` per point,
-  ``f_min <= sum f_z <= f_max`` per stance foot (toe and heel point forces model the line
-  foot's wrench exactly, with no roll moment); zero force on a swing foot;
+* contact wrenches (3c): friction pyramid ``|f_t| <= mu f_z`` per point, ``f_min <= sum
+  f_z <= f_max`` per stance foot (toe and heel point forces model the line foot's wrench
+  exactly, with no roll moment; a point foot's f_z bounds are variable bounds);
 * eq. (3a): ``x_{k+1} = step(x_k, u_k, dt_k)``.
 
-Joint limits (on nodes 1..h) and torque limits are variable bounds. One transcription is
-built per contact schedule and cached; everything else (state, dt_k, reference) is an NLP
-parameter, so a new MPC call with a known schedule only re-solves.
+The rows are ordered in FATROP's blocks ``gap_0, path_0, gap_1, ..., path_h`` (gap_k: eq.
+3a of stage k; path_k: the other rows of stage k). Joint limits (on nodes 1..h), torque
+limits and ``f_z >= 0`` are variable bounds; a swing foot's zero force is a fixed variable
+for IPOPT and path rows for FATROP. One transcription is built per contact schedule and
+cached; everything else (state, dt_k, reference) is an NLP parameter, so a new MPC call
+with a known schedule only re-solves.
 """
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, replace
 from typing import Any
@@ -35,31 +39,16 @@ import numpy as np
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.mpc.wholebody.dynamics import WholeBodyDynamics, quat_mul
 from gaitnet_mpc.mpc.wholebody.problem import WBConfig, WBProblem
+from gaitnet_mpc.mpc.wholebody.solution import WBSolution
+from gaitnet_mpc.mpc.wholebody.solvers import (
+    MAX_ITER,
+    SOLVERS,
+    WARM_OPTIONS,
+    solve_status,
+    solver_options,
+)
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
-
-SOLVERS = ("ipopt", "fatrop")
-
-
-@dataclass(frozen=True)
-class WBSolution:
-    """Result of one NMPC solve: trajectories, solver statistics, warm-start data."""
-
-    qpos: np.ndarray  # (h+1, nq)
-    qvel: np.ndarray  # (h+1, nv)
-    qacc: np.ndarray  # (h, nv)
-    tau_nm: np.ndarray  # (h, n_joints)
-    force_world_n: np.ndarray  # (h, n_contacts, 3)
-    cost: float
-    success: bool
-    status: str
-    iterations: int
-    solve_time_s: float
-    constraint_violation: float  # max bound/constraint violation at the returned point
-    solver: str
-    x_opt: np.ndarray  # raw decision vector (warm start)
-    lam_g: np.ndarray
-    lam_x: np.ndarray
 
 
 @dataclass
@@ -70,10 +59,17 @@ class _Transcription:
     lbx: np.ndarray
     ubx: np.ndarray
     build_time_s: float
+    block_sizes: tuple[int, ...]  # rows of gap_0, path_0, ..., path_h
 
 
 class WholeBodyMPC:
-    """Whole-body NMPC of Sec. III-A solved by IPOPT or FATROP through CasADi."""
+    """Whole-body NMPC of Sec. III-A solved by IPOPT or FATROP through CasADi.
+
+    ``solve(problem, warm_start)`` returns a :class:`WBSolution`; ``shift(solution)`` makes
+    the warm start of the next receding-horizon call. Run it with ``OPENBLAS_NUM_THREADS=1``:
+    CasADi's bundled OpenBLAS otherwise spreads IPOPT's MUMPS over every core for no gain
+    at this size (``benchmarks/wbmpc_solvers.py``).
+    """
 
     def __init__(
         self,
@@ -82,13 +78,18 @@ class WholeBodyMPC:
         solver: str = "ipopt",
         solver_options: dict[str, Any] | None = None,
         dynamics: WholeBodyDynamics | None = None,
+        warm_options: dict[str, Any] | None = None,
     ) -> None:
+        """``solver_options`` apply to every call; ``warm_options`` (default
+        :data:`WARM_OPTIONS`) on top of them to calls given a warm start with duals, which
+        use a second cached solver per contact schedule."""
         if solver not in SOLVERS:
             raise ConfigError("solver", solver, f"one of {SOLVERS}")
         self.robot = robot
         self.config = config or WBConfig()
         self.solver_name = solver
         self.solver_options = dict(solver_options or {})
+        self.warm_options = dict(WARM_OPTIONS[solver] if warm_options is None else warm_options)
         self.dyn = dynamics or WholeBodyDynamics(robot)
         d = self.dyn
         self.force_axes = (0, 2) if d.planar else (0, 1, 2)
@@ -124,7 +125,7 @@ class WholeBodyMPC:
         return ca.vertcat(*cols)
 
     # ------------------------------------------------------------ transcription
-    def _build(self, key: tuple[tuple[bool, ...], ...]) -> _Transcription:
+    def _build(self, key: tuple[tuple[bool, ...], ...], warm: bool = False) -> _Transcription:
         t0 = time.perf_counter()
         cfg, d, w = self.config, self.dyn, self.config.weights
         h, nq, nv = self.horizon_stages, d.nq, d.nv
@@ -218,53 +219,30 @@ class WholeBodyMPC:
         lbg_all = np.concatenate([r[1] for r in rows])
         ubg_all = np.concatenate([r[2] for r in rows])
         n_path = [sum(r[0].shape[0] for r in path[k]) for k in range(h + 1)]
+        n_gap = [sum(r[0].shape[0] for r in gap[k]) for k in range(h)]
+        blocks = (*(n for k in range(h) for n in (n_gap[k], n_path[k])), n_path[h])
         lbx, ubx = self._variable_bounds(key)
         nlp = {"x": x_all, "p": p, "f": cost, "g": g_all}
-        opts: dict[str, Any] = {"expand": True, "print_time": False}
-        if self.solver_name == "ipopt":
-            opts.update(
-                {
-                    "ipopt.print_level": 0,
-                    "ipopt.sb": "yes",
-                    "ipopt.tol": 1e-6,
-                    "ipopt.acceptable_tol": 1e-4,
-                    "ipopt.acceptable_iter": 5,
-                    "ipopt.max_iter": 200,
-                    "ipopt.linear_solver": "mumps",
-                }
-            )
-        else:
-            opts.update(
-                {
-                    "structure_detection": "manual",
-                    "N": h,
-                    "nx": [self.nx] * (h + 1),
-                    "nu": [self.nu] * h + [0],
-                    "ng": n_path,
-                    "equality": [bool(lo == hi) for lo, hi in zip(lbg_all, ubg_all, strict=True)],
-                    "fatrop.print_level": 0,
-                    "fatrop.max_iter": 200,
-                    "fatrop.tol": 1e-6,
-                    "fatrop.tol_acceptable": 1e-4,
-                    "fatrop.acceptable_iter": 5,
-                }
-            )
+        equality = [bool(lo == hi) for lo, hi in zip(lbg_all, ubg_all, strict=True)]
+        opts = solver_options(self.solver_name, self.nx, self.nu, n_path, equality)
         opts.update(self.solver_options)
+        if warm:
+            opts.update(self.warm_options)
         solver = ca.nlpsol(f"wbmpc_{self.solver_name}", self.solver_name, nlp, opts)
         build = time.perf_counter() - t0
         self.last_build_time_s = build
-        return _Transcription(solver, lbg_all, ubg_all, lbx, ubx, build)
+        return _Transcription(solver, lbg_all, ubg_all, lbx, ubx, build, blocks)
 
     def _state_cost(self, q: Any, v: Any, q_ref: Any, v_ref: Any) -> Any:
         """Eq. (2): ||q - q_ref||_Q1^2 + ||qdot - qdot_ref||_Q4^2 of one node."""
         d, w = self.dyn, self.config.weights
         if d.planar:
-            pose_err, qb, vb = q[0:3] - q_ref[0:3], [0, 2, 4], [0, 2, 4]
+            pose_err, qb, vb = q[0:3] - q_ref[0:3], [0, 2, 4], [0, 2, 4]  # x, z, pitch
             j0 = 3
         else:
             conj = ca.vertcat(q_ref[3], -q_ref[4:7])
             rot_err = 2 * quat_mul(conj, q[3:7])[1:4]
-            pose_err, qb, vb = ca.vertcat(q[0:3] - q_ref[0:3], rot_err), range(6), range(6)
+            pose_err, qb, vb = ca.vertcat(q[0:3] - q_ref[0:3], rot_err), [*range(6)], [*range(6)]
             j0 = 7
         q_base_w = ca.DM([w.q_base[i] for i in qb])
         v_base_w = ca.DM([w.v_base[i] for i in vb])
@@ -307,11 +285,24 @@ class WholeBodyMPC:
 
     def shift(self, solution: WBSolution) -> WBSolution:
         """Warm start for the next MPC call: every stage moved one earlier, the last stage
-        repeated. Duals are dropped (the next call's contact schedule usually differs)."""
-        x, n_stage = solution.x_opt, self.nx + self.nu
-        h = self.horizon_stages
-        shifted = np.concatenate([x[n_stage : h * n_stage], x[(h - 1) * n_stage :]])
-        return replace(solution, x_opt=shifted, lam_g=np.zeros(0), lam_x=np.zeros(0))
+        repeated, for the primal variables, the bound duals and the constraint duals (per
+        stage block; :meth:`solve` zeroes a block whose size differs in the new schedule)."""
+        n_stage, h = self.nx + self.nu, self.horizon_stages
+
+        def shift_stages(v: np.ndarray) -> np.ndarray:
+            return np.concatenate([v[n_stage : h * n_stage], v[(h - 1) * n_stage :]])
+
+        b = solution.lam_blocks
+        if len(b) == 2 * h + 1:
+            # New gap_k, path_k <- old gap_{k+1}, path_{k+1}; the last stage repeats.
+            b = (*b[2:-1], b[-3], b[-2], b[-1])
+        return replace(
+            solution,
+            x_opt=shift_stages(solution.x_opt),
+            lam_x=shift_stages(solution.lam_x),
+            lam_g=np.zeros(0),
+            lam_blocks=b,
+        )
 
     # ------------------------------------------------------------ solve
     def parameters(self, problem: WBProblem) -> np.ndarray:
@@ -350,6 +341,15 @@ class WholeBodyMPC:
                 x[o_f + self.nf * i + self.nf - 1] = weight_n / len(stance_pts)
         return x
 
+    def prepare(self, problem: WBProblem, warm: bool = False) -> float:
+        """Build and cache the solver of ``problem``'s contact schedule (cold or warm-start
+        settings); returns the build time [s], 0 if it was cached."""
+        key = (problem.schedule_key, warm and bool(self.warm_options))
+        if key in self._cache:
+            return 0.0
+        self._cache[key] = self._build(problem.schedule_key, warm)
+        return self._cache[key].build_time_s
+
     def solve(self, problem: WBProblem, warm_start: WBSolution | None = None) -> WBSolution:
         """Solve one NMPC instance; ``warm_start`` seeds primal and dual variables."""
         d = self.dyn
@@ -358,10 +358,15 @@ class WholeBodyMPC:
             raise ConfigError(
                 "WBProblem.stance", problem.horizon_stages, f"{self.horizon_stages} stages"
             )
-        key = problem.schedule_key
-        if key not in self._cache:
-            self._cache[key] = self._build(key)
-        tr = self._cache[key]
+        # Warm-start settings and duals only where the solver has warm settings (IPOPT);
+        # otherwise a warm start is the primal guess on the cold solver.
+        warm = (
+            bool(self.warm_options)
+            and warm_start is not None
+            and (warm_start.lam_g.size > 0 or len(warm_start.lam_blocks) > 0)
+        )
+        self.prepare(problem, warm)
+        tr = self._cache[(problem.schedule_key, warm)]
         args: dict[str, Any] = {
             "p": self.parameters(problem),
             "lbx": tr.lbx,
@@ -375,8 +380,9 @@ class WholeBodyMPC:
                     "warm_start", warm_start.x_opt.shape, f"({self.n_variables()},) decision vector"
                 )
             args["x0"] = warm_start.x_opt
-            if warm_start.lam_g.shape == tr.lbg.shape:
-                args["lam_g0"], args["lam_x0"] = warm_start.lam_g, warm_start.lam_x
+            if warm:
+                args["lam_x0"] = warm_start.lam_x
+                args["lam_g0"] = self._duals_for(tr, warm_start)
         else:
             args["x0"] = self.cold_start(problem)
         t0 = time.perf_counter()
@@ -391,7 +397,23 @@ class WholeBodyMPC:
             float(np.max(np.maximum(tr.lbx - x, 0.0), initial=0.0)),
             float(np.max(np.maximum(x - tr.ubx, 0.0), initial=0.0)),
         )
-        return self._unpack(x, res, stats, solve_time, viol)
+        sol = self._unpack(x, res, stats, solve_time, viol)
+        cuts = np.cumsum((0, *tr.block_sizes))
+        blocks = tuple(sol.lam_g[a:b] for a, b in itertools.pairwise(cuts))
+        return replace(sol, lam_blocks=blocks)
+
+    @staticmethod
+    def _duals_for(tr: _Transcription, warm_start: WBSolution) -> np.ndarray:
+        """Constraint duals for ``tr`` from a warm start: its raw ``lam_g`` if the layout
+        matches, else its blocks where their sizes match and zeros elsewhere."""
+        if not warm_start.lam_blocks:
+            lam = warm_start.lam_g
+            return lam if lam.shape == tr.lbg.shape else np.zeros(tr.lbg.shape)
+        parts = []
+        for i, n in enumerate(tr.block_sizes):
+            blk = warm_start.lam_blocks[i] if i < len(warm_start.lam_blocks) else None
+            parts.append(blk if blk is not None and blk.shape == (n,) else np.zeros(n))
+        return np.concatenate(parts)
 
     def _unpack(
         self, x: np.ndarray, res: dict, stats: dict, solve_time: float, viol: float
@@ -409,6 +431,8 @@ class WholeBodyMPC:
         iters = stats.get("iter_count", stats.get("iterations", {}).get("obj", [0]))
         if not isinstance(iters, int | np.integer):
             iters = len(iters) - 1 if hasattr(iters, "__len__") else -1
+        max_iter = int(self.solver_options.get(f"{self.solver_name}.max_iter", MAX_ITER))
+        success, status = solve_status(self.solver_name, stats, int(iters), max_iter, viol)
         return WBSolution(
             qpos=states[:, : d.nq],
             qvel=states[:, d.nq :],
@@ -416,8 +440,8 @@ class WholeBodyMPC:
             tau_nm=inputs[:, d.nv : d.nv + d.n_joints],
             force_world_n=force,
             cost=float(res["f"]),
-            success=bool(stats.get("success", False)),
-            status=str(stats.get("return_status", "")),
+            success=success,
+            status=status,
             iterations=int(iters),
             solve_time_s=solve_time,
             constraint_violation=viol,

@@ -57,7 +57,9 @@ class WBConfig:
     friction_coef: float = 0.7  # mu
     f_min_n: float = 10.0  # minimum normal force of a stance foot [N]
     f_max_n: float = 500.0  # maximum normal force of a stance foot [N]
-    swing_clearance_m: float = 0.04  # apex lower bound of the swing-foot height [m]
+    # Not in Table VI: apex of the swing-foot height lower bound [m] (3c, clearance).
+    swing_clearance_m: float = 0.04
+    # Accepted per-step sampling times [s]; Table VI uses 0.045-0.07 s.
     dt_min_s: float = 0.03
     dt_max_s: float = 0.08
     weights: WBWeights = field(default_factory=WBWeights)
