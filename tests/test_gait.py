@@ -389,3 +389,17 @@ def test_foothold_yaw_and_bad_input() -> None:
         _foothold(h, 0.0, 0.0, cmd_vel_mps=[0.0])
     with pytest.raises(ConfigError, match="max_lateral_separation_m"):
         RaibertConfig(min_lateral_separation_m=0.5, max_lateral_separation_m=0.2)
+
+
+def test_step_durations_fixed_and_drawn() -> None:
+    from gaitnet_mpc.gait.step_durations import StepDurations
+
+    assert StepDurations(dt_s=0.05).dt_of_step(7) == 0.05
+    drawn = StepDurations(duration_range_s=(0.15, 0.40), seed=3)
+    dts = np.array([drawn.dt_of_step(i) for i in range(400)])
+    assert np.all((dts >= 0.03) & (dts <= 0.08))
+    assert dts.std() > 0.01  # really drawn: uniform on [0.03, 0.08] has std 0.0144
+    assert drawn.dt_of_step(5) == StepDurations(duration_range_s=(0.15, 0.40), seed=3).dt_of_step(5)
+    assert drawn.dt_of_step(5) != StepDurations(duration_range_s=(0.15, 0.40), seed=4).dt_of_step(5)
+    with pytest.raises(ConfigError, match="duration_range_s"):
+        StepDurations(duration_range_s=(0.4, 0.15))

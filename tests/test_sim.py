@@ -176,3 +176,16 @@ def test_biped_stands() -> None:
     sim = Simulator(biped, load_course("flat"))
     _run(sim, StandController(biped), 1.0)
     assert not sim.fall.fell
+
+
+def test_protocol_pushes_follow_the_papers_protocol() -> None:
+    from gaitnet_mpc.sim.disturbances import protocol_pushes
+
+    pushes = protocol_pushes(seed=2, t_start_s=10.0, t_end_s=40.0)
+    assert [p.t_s for p in pushes] == [10.0 + 2.0 * i for i in range(15)]
+    forces = np.array([p.force_world_n for p in pushes])
+    magnitude = np.linalg.norm(forces, axis=1)
+    assert np.all((magnitude >= 10.0) & (magnitude <= 100.0)) and np.all(forces[:, 2] == 0.0)
+    assert all(p.duration_s == 0.2 for p in pushes)
+    assert len({round(float(np.arctan2(f[1], f[0])), 3) for f in forces}) == 15  # random
+    assert protocol_pushes(seed=2, t_start_s=10.0, t_end_s=40.0) == pushes

@@ -22,8 +22,8 @@ class ControllerContext:
     controller only through a :class:`TerrainView`), the velocity command, options and the
     controller's settings.
 
-    ``options``: ``dt_s`` (kd: the fixed MPC sampling time of its dt policy; srbm: its
-    ``dt_s`` when ``config`` is None), and when ``config`` is None ``preset`` and
+    ``options``: ``dt_s`` (kd: the fixed MPC sampling time of its dt policy; srbm, wbmpc:
+    their fixed dt when ``config`` is None), and when ``config`` is None ``preset`` and
     ``preview`` (see :func:`controller_config`). ``config``: the settings dataclass
     (``KDWalkConfig``, ``SRBMWalkConfig``); None: made by :func:`controller_config`.
     """
@@ -45,6 +45,10 @@ def config_type(name: str) -> type | None:
         from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig
 
         return SRBMWalkConfig
+    if name == "wbmpc":
+        from gaitnet_mpc.control.wbmpc_walk import WBWalkConfig
+
+        return WBWalkConfig
     return None
 
 
@@ -87,6 +91,8 @@ def controller_config(
         config = preview_walk_config(config)
     if dt_s is not None and name == "srbm":
         config = replace(config, dt_s=dt_s)
+    if dt_s is not None and name == "wbmpc":
+        config = replace(config, step_durations=replace(config.step_durations, dt_s=dt_s))
     if overrides:
         config = configio.apply(config, configio.parse_overrides(overrides), "--set ")
     return config
@@ -130,10 +136,18 @@ def _kd(ctx: ControllerContext) -> Controller:
     return KDWalkController(ctx.robot, terrain, ctx.command, dt_policy=policy, config=config)
 
 
+def _wbmpc(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.wbmpc_walk import WBWalkController
+
+    config = _config("wbmpc", ctx)
+    return WBWalkController(ctx.robot, TerrainView(ctx.course), ctx.command, config)
+
+
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
     "kd": _kd,
     "stand": _stand,
     "srbm": _srbm,
+    "wbmpc": _wbmpc,
 }
 
 

@@ -84,3 +84,32 @@ class Push:
                 raise ConfigError("--push", text, f"a value for '{key}'")
         force = (values.get("fx", 0.0), values.get("fy", 0.0), values.get("fz", 0.0))
         return cls(t_s=values["t"], force_world_n=force, duration_s=values["dur"])
+
+
+def protocol_pushes(
+    seed: int,
+    t_start_s: float,
+    t_end_s: float,
+    period_s: float = 2.0,
+    force_range_n: tuple[float, float] = (10.0, 100.0),
+    duration_s: float = 0.2,
+) -> tuple[Push, ...]:
+    """The pushes of the paper's data-collection protocol (Sec. IV-A-1): every ``period_s``
+    from ``t_start_s`` (exclusive of ``t_end_s``), a horizontal force at the trunk CoM of a
+    magnitude drawn uniformly from ``force_range_n`` [N], in a direction drawn uniformly,
+    for ``duration_s``. Reproducible from ``seed``."""
+    if not (np.isfinite(period_s) and period_s > 0):
+        raise ConfigError("period_s", period_s, "a period > 0 s")
+    lo, hi = force_range_n
+    if not 0.0 <= lo <= hi:
+        raise ConfigError("force_range_n", force_range_n, "(min, max) with 0 <= min <= max [N]")
+    rng = np.random.default_rng(seed)
+    pushes = []
+    t = float(t_start_s)
+    while t < t_end_s - 1e-9:
+        force = rng.uniform(lo, hi)
+        angle = rng.uniform(-np.pi, np.pi)
+        f = (force * float(np.cos(angle)), force * float(np.sin(angle)), 0.0)
+        pushes.append(Push(t, f, duration_s))
+        t += period_s
+    return tuple(pushes)

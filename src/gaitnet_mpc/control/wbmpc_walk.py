@@ -1,0 +1,236 @@
+"""``wbmpc``: walking with the whole-body NMPC of paper Sec. III-A (the teacher of Gait-Net).
+
+Per control tick (1 kHz):
+
+* advance the gait schedule; at a step start take the step's MPC sampling time from
+  :class:`~gaitnet_mpc.gait.step_durations.StepDurations` (fixed ``--dt``, or drawn per
+  stride for data collection) and tell the schedule the next step's;
+* at every stage boundary of the schedule, solve the NMPC (eqs. 1-4) from the measured
+  state, warm-started from the previous solution shifted by one stage: the horizon starts
+  in the current stage of the current step, every stage of a step lasts that step's dt,
+  and stage 0 lasts what is left of the current stage;
+* apply the first stage's joint torques plus a joint PD toward the predicted state
+  (interpolated between nodes 0 and 1 over stage 0).
+
+Re-solving once per stage (every 30-80 ms) is the issue's minimum; the solve takes
+~0.1-0.2 s of CPU on the humanoid, so a 100 Hz re-solve would make data collection about
+3x slower (``benchmarks/results/wbmpc.md``). The reference of eq. 2 is the project's
+joint-space walking reference ``f_ref`` (:func:`~gaitnet_mpc.kinematics.make_reference`,
+the one ``kd`` starts Algorithm 1 from): the CoM along the commanded path (from a point
+within ``path_max_error_m`` of the measured CoM, so a push does not wind it up), swing
+feet to Raibert footholds, legs by the analytic IK. A standing posture carried along the
+path instead made the plan walk at a fraction of the command (biped 0.5 m/s: 0.19 m in
+3 s), as every joint's deviation from the posture costs and no step is demanded.
+The NMPC knows nothing of the terrain beyond the ground height at the start: it
+is made for flat ground (the data-collection protocol), and says so in the run's
+``terrain_knowledge``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from gaitnet_mpc.command import Command
+from gaitnet_mpc.control.lowlevel import LowLevelConfig
+from gaitnet_mpc.control.terrain_view import TerrainView
+from gaitnet_mpc.control.walking_base import WalkingBase, walking_raibert
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gait import GaitScheduleConfig
+from gaitnet_mpc.gait.step_durations import StepDurations
+from gaitnet_mpc.kinematics.reference import ReferenceTiming, ReferenceWorkspace, make_reference
+from gaitnet_mpc.mpc.wholebody import WBConfig, WBProblem, WBSolution, WholeBodyMPC, make_problem
+from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS
+from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.state import RobotState
+
+
+@dataclass(frozen=True)
+class WBWalkConfig:
+    """Settings of the whole-body NMPC walking controller.
+
+    Attributes:
+        mpc: horizon, Table VI weights and limits of the NMPC.
+        solver: NLP solver, ``"ipopt"`` (the paper's; measured fastest here) or ``"fatrop"``.
+        step_durations: where each step's dt comes from (``--dt`` sets ``dt_s``; with
+            ``duration_range_s`` drawn per stride).
+        joint_kp_nm_per_rad, joint_kd_nms_per_rad: joint PD toward the predicted state,
+            on top of the planned torques.
+        max_accel_mps2: the command is ramped up from rest at this rate.
+        path_max_error_m: the reference path stays within this of the measured base [m].
+    """
+
+    mpc: WBConfig = field(default_factory=WBConfig)
+    solver: str = "ipopt"
+    step_durations: StepDurations = field(default_factory=StepDurations)
+    joint_kp_nm_per_rad: float = 50.0
+    joint_kd_nms_per_rad: float = 1.0
+    max_accel_mps2: float = 1.0
+    path_max_error_m: float = 0.03
+
+    def __post_init__(self) -> None:
+        if self.solver not in SOLVERS:
+            raise ConfigError("solver", self.solver, f"one of {SOLVERS}")
+        for name in ("joint_kp_nm_per_rad", "joint_kd_nms_per_rad", "path_max_error_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ConfigError(name, value, "a finite value >= 0")
+        if not (math.isfinite(self.max_accel_mps2) and self.max_accel_mps2 > 0.0):
+            raise ConfigError("max_accel_mps2", self.max_accel_mps2, "a value > 0 m/s^2")
+        if self.step_durations.stages_per_step != self.mpc.stages_per_step:
+            raise ConfigError(
+                "step_durations.stages_per_step",
+                self.step_durations.stages_per_step,
+                f"mpc.stages_per_step = {self.mpc.stages_per_step}",
+            )
+
+
+class WBWalkController(WalkingBase):
+    """Whole-body NMPC + gait schedule + joint PD toward the plan."""
+
+    name = "wbmpc"
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        terrain: TerrainView,
+        command: Command,
+        config: WBWalkConfig | None = None,
+    ) -> None:
+        self.config = config or WBWalkConfig()
+        c = self.config
+        # CasADi's bundled OpenBLAS would spread IPOPT's linear algebra over every core for
+        # no gain at this size (benchmarks/wbmpc_solvers.py); it reads this at first use.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        lo, hi = c.mpc.dt_min_s, c.mpc.dt_max_s
+        schedule = GaitScheduleConfig(
+            stages_per_step=c.mpc.stages_per_step,
+            horizon_stages=c.mpc.horizon_stages,
+            default_dt_s=c.step_durations.dt_of_step(0),
+            dt_bounds_s=(lo, hi),
+        )
+        # the low level is not used (torques come from the plan), but the base needs one
+        super().__init__(robot, terrain, command, schedule, LowLevelConfig(), c.max_accel_mps2)
+        self.mpc = WholeBodyMPC(robot, c.mpc, solver=c.solver)
+        self.ref_workspace = ReferenceWorkspace(robot)
+        self.raibert = walking_raibert(robot.spec.planar)
+        self._joints_q = robot.joint_qpos_adr
+        self._joints_v = robot.joint_dof_adr
+        self._nominal_qpos = robot.standing_qpos()  # make_problem needs one; f_ref replaces it
+
+    # ---------------------------------------------------------------- episode
+    def reset(self, state: RobotState) -> None:
+        super().reset(state)
+        self.liftoff = {f: state.foot_pos_world_m[f].copy() for f in FEET}
+        self.plan: WBSolution | None = None
+        self.t_plan_s = state.t_s
+        self.stage0_s = 1.0
+        self._solved_stage: tuple[int, int] | None = None
+        self._started_step = -1
+        self.failed_solves = 0
+
+    def terrain_knowledge(self) -> dict[str, object]:
+        out = super().terrain_knowledge()
+        return {**out, "used": "ground height at the start only (flat ground)"}
+
+    # ---------------------------------------------------------------- planning
+    def _step_dts(self) -> tuple[float, float]:
+        """dt [s] of the current step and of the next (later steps in the horizon repeat
+        it, as in the gait schedule)."""
+        i = self.schedule.step_index
+        d = self.config.step_durations
+        return d.dt_of_step(i), d.dt_of_step(i + 1)
+
+    def _reference(
+        self, state: RobotState, timing: ReferenceTiming, cmd: Command
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``f_ref`` at nodes 1..h in MuJoCo coordinates: (qpos (h, nq), qvel (h, nv))."""
+        sched = self.schedule
+        swing, stance = sched.swing_foot, sched.stance_foot
+        t_left = sched.time_left_in_step_s
+        target = self._raibert(state, swing, t_left, cmd)
+        nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
+        lim = self.config.path_max_error_m
+        p_com = state.com_world_m.copy()
+        p_com[:2] += np.clip(self._commanded_path_xy(state.t_s) - p_com[:2], -lim, lim)
+        q, _ = self.robot.mj_to_pin(state.qpos, state.qvel)
+        ref = make_reference(
+            self.robot,
+            q,
+            timing,
+            cmd,
+            {swing: target[None, :], stance: nxt[None, :]},
+            p_foot_now_m=state.foot_pos_world_m,
+            p_liftoff_m={swing: self.liftoff[swing]},
+            p_com_start_m=p_com,
+            workspace=self.ref_workspace,
+        )
+        nodes = [
+            self.robot.pin_to_mj(ref.q_ref[k], ref.v_ref[k]) for k in range(1, timing.horizon + 1)
+        ]
+        return np.stack([n[0] for n in nodes]), np.stack([n[1] for n in nodes])
+
+    def _problem(self, state: RobotState, phase_stage: int) -> WBProblem:
+        sched = self.schedule
+        k = self.profile.ramp(state.t_s - self.t0_s)
+        c = self.command
+        ramped = Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
+        problem = make_problem(
+            self.config.mpc,
+            state.qpos,
+            state.qvel,
+            self._nominal_qpos,
+            ramped,
+            self.robot.spec.planar,
+            step_dt_s=self._step_dts(),
+            phase_stage=phase_stage,
+            stance_foot=sched.stance_foot,
+            ground_z_m=self.ground_z,
+        )
+        timing = ReferenceTiming.from_horizon(sched.horizon(), self.config.mpc.stages_per_step)
+        qpos_ref, qvel_ref = self._reference(state, timing, ramped)
+        return replace(
+            problem, dt_stage_s=timing.dts_s.copy(), qpos_ref=qpos_ref, qvel_ref=qvel_ref
+        )
+
+    def _solve(self, state: RobotState, phase_stage: int, full: bool) -> None:
+        problem = self._problem(state, phase_stage)
+        warm = None if self.plan is None else self.mpc.shift(self.plan)
+        sol = self.mpc.solve(problem, warm)
+        self._stats.record(sol.solve_time_s, sol.iterations, sol.success, full)
+        if not sol.success:
+            self.failed_solves += 1
+        self.plan = sol
+        self.t_plan_s = state.t_s
+        self.stage0_s = float(problem.dt_stage_s[0])
+
+    # ---------------------------------------------------------------- control
+    def compute(self, state: RobotState) -> np.ndarray:
+        sched = self.schedule
+        sched.advance_to(state.t_s)
+        full = False
+        if sched.at_step_start and sched.step_index != self._started_step:
+            self._started_step = sched.step_index
+            dt0, dt1 = self._step_dts()
+            sched.set_step_dt(dt0)
+            sched.set_next_step_dt(dt1)
+            self._steps.append(sched.current_step_duration_s)
+            self.liftoff[sched.swing_foot] = state.foot_pos_world_m[sched.swing_foot].copy()
+            full = True
+        stage = (sched.step_index, int(sched.horizon().stage_in_step[0]))
+        if stage != self._solved_stage:
+            self._solved_stage = stage
+            self._solve(state, stage[1], full)
+        plan = self.plan
+        assert plan is not None
+        s = min(max((state.t_s - self.t_plan_s) / self.stage0_s, 0.0), 1.0)
+        q_pred = (1 - s) * plan.qpos[0] + s * plan.qpos[1]
+        v_pred = (1 - s) * plan.qvel[0] + s * plan.qvel[1]
+        c = self.config
+        tau = plan.tau_nm[0].copy()
+        tau += c.joint_kp_nm_per_rad * (q_pred[self._joints_q] - state.qpos[self._joints_q])
+        tau += c.joint_kd_nms_per_rad * (v_pred[self._joints_v] - state.qvel[self._joints_v])
+        return tau
