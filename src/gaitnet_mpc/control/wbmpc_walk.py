@@ -37,12 +37,20 @@ import numpy as np
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
-from gaitnet_mpc.control.walking_base import WalkingBase, walking_raibert
+from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.gait import GaitScheduleConfig
+from gaitnet_mpc.gait import GaitScheduleConfig, RaibertConfig, RaibertHeuristic
+from gaitnet_mpc.gait.lip import lip_gains, lip_propagate
 from gaitnet_mpc.gait.step_durations import StepDurations
 from gaitnet_mpc.kinematics.reference import ReferenceTiming, ReferenceWorkspace, make_reference
-from gaitnet_mpc.mpc.wholebody import WBConfig, WBProblem, WBSolution, WholeBodyMPC, make_problem
+from gaitnet_mpc.mpc.wholebody import (
+    WBConfig,
+    WBProblem,
+    WBSolution,
+    WBWeights,
+    WholeBodyMPC,
+    make_problem,
+)
 from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
@@ -53,7 +61,9 @@ class WBWalkConfig:
     """Settings of the whole-body NMPC walking controller.
 
     Attributes:
-        mpc: horizon, Table VI weights and limits of the NMPC.
+        mpc: horizon, Table VI weights and limits of the NMPC, and a terminal weight 10x
+            the stage weight (beyond the paper; without it the plan let the robot sink and
+            fall back at the horizon end, and it fell within 1 s at 1 m/s).
         solver: NLP solver, ``"ipopt"`` (the paper's; measured fastest here) or ``"fatrop"``.
         step_durations: where each step's dt comes from (``--dt`` sets ``dt_s``; with
             ``duration_range_s`` drawn per stride).
@@ -61,15 +71,18 @@ class WBWalkConfig:
             on top of the planned torques.
         max_accel_mps2: the command is ramped up from rest at this rate.
         path_max_error_m: the reference path stays within this of the measured base [m].
+        stance_half_width_m: lateral CoM-to-foot distance of the LIP sway orbit that the
+            footholds of the reference aim at [m].
     """
 
-    mpc: WBConfig = field(default_factory=WBConfig)
+    mpc: WBConfig = field(default_factory=lambda: WBConfig(weights=WBWeights(terminal_scale=10.0)))
     solver: str = "ipopt"
     step_durations: StepDurations = field(default_factory=StepDurations)
     joint_kp_nm_per_rad: float = 50.0
     joint_kd_nms_per_rad: float = 1.0
     max_accel_mps2: float = 1.0
     path_max_error_m: float = 0.03
+    stance_half_width_m: float = 0.07
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVERS:
@@ -116,7 +129,6 @@ class WBWalkController(WalkingBase):
         super().__init__(robot, terrain, command, schedule, LowLevelConfig(), c.max_accel_mps2)
         self.mpc = WholeBodyMPC(robot, c.mpc, solver=c.solver)
         self.ref_workspace = ReferenceWorkspace(robot)
-        self.raibert = walking_raibert(robot.spec.planar)
         self._joints_q = robot.joint_qpos_adr
         self._joints_v = robot.joint_dof_adr
         self._nominal_qpos = robot.standing_qpos()  # make_problem needs one; f_ref replaces it
@@ -144,6 +156,51 @@ class WBWalkController(WalkingBase):
         d = self.config.step_durations
         return d.dt_of_step(i), d.dt_of_step(i + 1)
 
+    def _footholds(
+        self, state: RobotState, t_left_s: float, cmd: Command
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Footholds (3,) of the swing foot and of the stance foot's next step: the Raibert
+        law with the LIP deadbeat gains at the CoM state the LIP predicts for touchdown
+        (as ``srbm``, :func:`~gaitnet_mpc.gait.lip.lip_gains`). The geometric hip offset
+        instead let the lateral sway grow: feet 0.46 m apart and the legs rolled 0.3-0.5
+        rad within 0.5 s at 1 m/s, then a fall."""
+        sched, c = self.schedule, self.config
+        step_s = sched.current_step_duration_s
+        z0 = float(state.com_world_m[2]) - self.ground_z
+        omega, k_v, lateral, cmd_scale = lip_gains(z0, step_s, c.stance_half_width_m)
+        planar = self.robot.spec.planar
+        raibert = RaibertHeuristic(
+            RaibertConfig(
+                hip_lateral_offset_m=0.0 if planar else lateral,
+                velocity_gain_s=k_v,
+                min_lateral_separation_m=0.0 if planar else 0.08,
+            )
+        )
+        v_cmd = cmd_scale * np.array([cmd.vx_mps, cmd.vy_mps])
+        out = []
+        p_com, v_com = state.com_world_m[:2], state.com_vel_world_mps[:2]
+        p_stance, t_s = state.foot_pos_world_m[sched.stance_foot], t_left_s
+        for foot in (sched.swing_foot, sched.stance_foot):
+            p_com, v_com = lip_propagate(p_com, v_com, p_stance[:2], omega, t_s)
+            p = raibert.foothold(
+                foot,
+                p_com_world_m=np.array([p_com[0], p_com[1], state.com_world_m[2]]),
+                v_com_world_mps=v_com,
+                cmd_vel_mps=v_cmd,
+                stance_duration_s=step_s,
+                time_to_touchdown_s=0.0,
+                p_stance_foot_world_m=p_stance,
+                ground_z_m=self.ground_z,
+                yaw_rad=self.profile.heading_rad(state.t_s),
+                cmd_yaw_rate_radps=cmd.yaw_rate_radps,
+            )
+            p[2] = self.ground_z + self.robot.spec.foot_contact_radius_m
+            if planar:
+                p[1] = state.foot_pos_world_m[foot][1]
+            out.append(p)
+            p_stance, t_s = p, step_s
+        return out[0], out[1]
+
     def _reference(
         self, state: RobotState, timing: ReferenceTiming, cmd: Command
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -151,8 +208,7 @@ class WBWalkController(WalkingBase):
         sched = self.schedule
         swing, stance = sched.swing_foot, sched.stance_foot
         t_left = sched.time_left_in_step_s
-        target = self._raibert(state, swing, t_left, cmd)
-        nxt = self._raibert(state, stance, t_left + sched.current_step_duration_s, cmd)
+        target, nxt = self._footholds(state, t_left, cmd)
         lim = self.config.path_max_error_m
         p_com = state.com_world_m.copy()
         p_com[:2] += np.clip(self._commanded_path_xy(state.t_s) - p_com[:2], -lim, lim)

@@ -178,7 +178,8 @@ class WholeBodyMPC:
                         for i in pts:
                             add(p_c[2, i] - ground - swing_min[k - 1], 0.0, np.inf)
                 # Eq. (2): tracking of node k (base pose, joints) and rates.
-                cost += self._state_cost(qk, vk, q_ref[:, k - 1], v_ref[:, k - 1])
+                scale = w.terminal_scale if k == h else 1.0
+                cost += scale * self._state_cost(qk, vk, q_ref[:, k - 1], v_ref[:, k - 1])
             if k == h:
                 break
             acc, tau, lam = self._unpack_u(us[k])

@@ -37,13 +37,17 @@ class WBWeights:
     moment: float = 1e-3  # Q3^tau, per foot moment component
     v_base: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0, 5.0)  # Q4^{q_fb}
     v_joint: float = 1.0  # Q4^{q_f,i}
+    # The last node's state cost is scaled by this (beyond Table VI, which has no terminal
+    # weight): without it the plan lets the robot sink and fall back at the horizon end,
+    # where a fall costs little.
+    terminal_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("q_base", "v_base"):
             value = getattr(self, name)
             if len(value) != 6 or min(value) < 0.0:
                 raise ConfigError(f"weights.{name}", value, "6 non-negative numbers")
-        for name in ("q_joint", "tau_joint", "force", "moment", "v_joint"):
+        for name in ("q_joint", "tau_joint", "force", "moment", "v_joint", "terminal_scale"):
             if getattr(self, name) < 0.0:
                 raise ConfigError(f"weights.{name}", getattr(self, name), "a value >= 0")
 
