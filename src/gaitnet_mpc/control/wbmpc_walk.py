@@ -93,6 +93,16 @@ class WBWalkConfig:
                 raise ConfigError(name, value, "a finite value >= 0")
         if not (math.isfinite(self.max_accel_mps2) and self.max_accel_mps2 > 0.0):
             raise ConfigError("max_accel_mps2", self.max_accel_mps2, "a value > 0 m/s^2")
+        lo, hi = self.mpc.dt_min_s, self.mpc.dt_max_s
+        d = self.step_durations
+        if not lo <= d.dt_s <= hi:
+            raise ConfigError("--dt (step_durations.dt_s)", d.dt_s, f"a time in [{lo}, {hi}] s")
+        n = d.stages_per_step
+        r = d.duration_range_s
+        if r is not None and not (lo * n <= r[0] and r[1] <= hi * n):
+            raise ConfigError(
+                "step_durations.duration_range_s", r, f"durations in [{lo * n:g}, {hi * n:g}] s"
+            )
         if self.step_durations.stages_per_step != self.mpc.stages_per_step:
             raise ConfigError(
                 "step_durations.stages_per_step",
