@@ -152,7 +152,6 @@ class WBWalkController(WalkingBase):
         self.stage0_s = 1.0
         self._solved_stage: tuple[int, int] | None = None
         self._started_step = -1
-        self.failed_solves = 0
 
     def terrain_knowledge(self) -> dict[str, object]:
         out = super().terrain_knowledge()
@@ -267,8 +266,6 @@ class WBWalkController(WalkingBase):
         warm = None if self.plan is None else self.mpc.shift(self.plan)
         sol = self.mpc.solve(problem, warm)
         self._stats.record(sol.solve_time_s, sol.iterations, sol.success, full)
-        if not sol.success:
-            self.failed_solves += 1
         self.plan = sol
         self.t_plan_s = state.t_s
         self.stage0_s = float(problem.dt_stage_s[0])

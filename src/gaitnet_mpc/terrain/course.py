@@ -169,19 +169,8 @@ class Course:
         reach_y_m: float = 0.25,
         margin_m: float = 0.03,
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
-        """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step preview).
-
-        The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
-        (the hip is above it). Among the patches that allow ``foot``, each shrunk by
-        ``margin_m``, those whose box meets that window are candidates; the one whose part
-        inside the window is closest to the nominal foothold ``p_nominal_xy`` wins, and the
-        bounds are its whole shrunk box (the window only chooses the patch; the MPC keeps
-        the freedom to step beyond it). If no patch meets the window, the patch closest to
-        the window is used (:func:`.bounds.reachable_foothold_bounds`).
-
-        Returns:
-            ``(p_min (3,), p_max (3,), patch index or None)``; z bounds are the patch top.
-        """
+        """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step
+        preview), on this course's patches: :func:`.bounds.reachable_foothold_bounds`."""
         return bounds.reachable_foothold_bounds(
             self.patches,
             p_com_td_xy,
