@@ -4,9 +4,11 @@ simulated time through the path of ``gaitnet-mpc run`` (settings from the defaul
 
 Measured (this test's setup, 1 s, forward command 0.5 m/s for the walkers): no combination
 falls or diverges; kd covers 0.23 m (biped2d) / 0.34 m (humanoid3d), srbm 0.13 m / 0.34 m,
-stand drifts < 5 mm. All 30 episodes took 60-75 s on a loaded 2-core machine. Within one second the
-robots are still on the start platform of every course, so the terrain features themselves
-are covered by the closed-loop tests of the controllers, not here.
+stand drifts < 5 mm. The kd/srbm/stand episodes took 60-75 s on a loaded 2-core machine.
+wbmpc runs on flat only: it knows no terrain, and building its NLPs takes ~40 s per
+humanoid controller. Within one second the robots are still on the start platform of
+every course, so the terrain features themselves are covered by the closed-loop tests of
+the controllers, not here.
 """
 
 from __future__ import annotations
@@ -41,6 +43,8 @@ def test_one_second_without_fall_or_divergence(
     course_name: str,
     robots: Callable[[str], RobotModel],
 ) -> None:
+    if controller == "wbmpc" and course_name != "flat":
+        pytest.skip("wbmpc is made for flat ground; its NLP build costs ~40 s per humanoid")
     robot = robots(robot_name)
     course = load_course(course_name)
     command = Command() if controller == "stand" else Command(WALK_VX_MPS)
