@@ -102,6 +102,8 @@ class LowLevelController:
             jac = pin.getFrameJacobian(model, data, r.pin_foot_frame_ids[foot], lwa)
             tau[idx] = -(jac.T @ wrench)[r.n_root_dofs :][idx] - c.stance_kd_nms_per_rad * qdj[idx]
             if swing_yaw_rad is not None and c.stance_yaw_kp_nm_per_rad > 0.0:
+                # (a + pi) mod 2 pi - pi, not geometry.wrap_angle (atan2): that differs in the
+                # last bit and would change the closed-loop logs
                 err = (state.base_rpy_rad[2] - swing_yaw_rad + np.pi) % (2 * np.pi) - np.pi
                 tau[idx[0]] += (  # idx[0]: hip yaw, the first leg joint
                     c.stance_yaw_kp_nm_per_rad * err
