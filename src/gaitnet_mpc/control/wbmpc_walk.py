@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -49,9 +49,9 @@ from gaitnet_mpc.mpc.wholebody import (
     WBSolution,
     WBWeights,
     WholeBodyMPC,
-    make_problem,
 )
 from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS
+from gaitnet_mpc.mpc.wholebody.problem import swing_height_profile
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -141,7 +141,6 @@ class WBWalkController(WalkingBase):
         self.ref_workspace = ReferenceWorkspace(robot)
         self._joints_q = robot.joint_qpos_adr
         self._joints_v = robot.joint_dof_adr
-        self._nominal_qpos = robot.standing_qpos()  # make_problem needs one; f_ref replaces it
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
@@ -243,22 +242,17 @@ class WBWalkController(WalkingBase):
         k = self.profile.ramp(state.t_s - self.t0_s)
         c = self.command
         ramped = Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
-        problem = make_problem(
-            self.config.mpc,
-            state.qpos,
-            state.qvel,
-            self._nominal_qpos,
-            ramped,
-            self.robot.spec.planar,
-            step_dt_s=self._step_dts(),
-            phase_stage=phase_stage,
-            stance_foot=sched.stance_foot,
-            ground_z_m=self.ground_z,
-        )
         timing = ReferenceTiming.from_horizon(sched.horizon(), self.config.mpc.stages_per_step)
         qpos_ref, qvel_ref = self._reference(state, timing, ramped)
-        return replace(
-            problem, dt_stage_s=timing.dts_s.copy(), qpos_ref=qpos_ref, qvel_ref=qvel_ref
+        return WBProblem(
+            qpos0=state.qpos.copy(),
+            qvel0=state.qvel.copy(),
+            stance=timing.contact.copy(),
+            dt_stage_s=timing.dts_s.copy(),
+            qpos_ref=qpos_ref,
+            qvel_ref=qvel_ref,
+            swing_height_min_m=swing_height_profile(self.config.mpc, phase_stage),
+            ground_z_m=self.ground_z,
         )
 
     def _solve(self, state: RobotState, phase_stage: int, full: bool) -> None:
@@ -283,7 +277,7 @@ class WBWalkController(WalkingBase):
             self._steps.append(sched.current_step_duration_s)
             self.liftoff[sched.swing_foot] = state.foot_pos_world_m[sched.swing_foot].copy()
             full = True
-        stage = (sched.step_index, int(sched.horizon().stage_in_step[0]))
+        stage = (sched.step_index, sched.stage_in_step)
         if stage != self._solved_stage:
             self._solved_stage = stage
             self._solve(state, stage[1], full)
