@@ -145,7 +145,7 @@ def run_episode(
             state = sim.state()
             tau = controller.compute(state)
             probe.after_compute(state.t_s)
-            tel = controller.telemetry()
+            tel = probe.telemetry
             events.update(state, None if tel is None else {tel.swing_foot: tel.step_end_s})
             log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
             sim.step(tau)

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from gaitnet_mpc.control.base import Controller
+from gaitnet_mpc.control.base import Controller, Telemetry
 from gaitnet_mpc.robots import FEET
 
 
@@ -117,10 +117,15 @@ H_COLS = slice(EpisodeLog.columns.index("lGx"), EpisodeLog.columns.index("kGz") 
 
 class TelemetryRecorder:
     """Records a controller's solves (``mpc_log.csv``) and telemetry (``log.csv`` columns)
-    after each :meth:`~gaitnet_mpc.control.base.Controller.compute`."""
+    after each :meth:`~gaitnet_mpc.control.base.Controller.compute`.
+
+    ``telemetry`` is the controller's telemetry of the last tick, asked once per tick by
+    :meth:`after_compute` (made after the controller's ``reset``).
+    """
 
     def __init__(self, controller: Controller) -> None:
         self.controller = controller
+        self.telemetry: Telemetry | None = controller.telemetry()
         self.n_seen = 0
         self.last_qps = np.nan
         self.last_ms = np.nan
@@ -128,16 +133,18 @@ class TelemetryRecorder:
 
     def step_dt(self) -> float:
         """MPC dt of the current step [s] (NaN without a gait)."""
-        tel = self.controller.telemetry()
+        tel = self.telemetry
         return np.nan if tel is None else float(tel.step_dt_s)
 
     def stance_code(self) -> float:
         """Index of the stance foot in ``FEET`` (NaN without a gait)."""
-        tel = self.controller.telemetry()
+        tel = self.telemetry
         return np.nan if tel is None else float(FEET.index(tel.stance_foot))
 
     def after_compute(self, t_s: float) -> None:
-        """Record the solves that the last ``compute`` call made."""
+        """Take this tick's telemetry and record the solves that the last ``compute`` call
+        made."""
+        self.telemetry = self.controller.telemetry()
         stats = self.controller.mpc_stats
         if stats is None or self.log is None:
             return
@@ -164,7 +171,7 @@ class TelemetryRecorder:
 
     def _prediction(self, t_s: float) -> list[float]:
         """``[t_pred, l_G,x, k_G,y, k_G,z]`` one stage ahead of a plan made at ``t_s``."""
-        tel = self.controller.telemetry()
+        tel = self.telemetry
         pred = None if tel is None else tel.prediction
         if pred is None or abs(pred.t_plan_s - t_s) > 1e-9:
             return [np.nan] * 4  # no plan, or the solve failed and the old plan was kept
