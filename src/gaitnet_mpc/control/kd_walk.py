@@ -21,10 +21,12 @@ from gaitnet_mpc.control.base import MomentumPrediction
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
-from gaitnet_mpc.control.walking_base import WalkingBase, walking_raibert
+from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
     GaitScheduleConfig,
+    RaibertConfig,
+    RaibertHeuristic,
     SwingTrajectory,
 )
 from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
@@ -41,6 +43,18 @@ from gaitnet_mpc.mpc.sequential import (
 )
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
+
+
+def _kd_raibert(planar: bool) -> RaibertHeuristic:
+    """The Raibert heuristic of ``kd``'s initial footholds (the MPC then moves them): hip
+    offset 0.065 m, feet 0.08-0.30 m apart sideways (none for a biped)."""
+    return RaibertHeuristic(
+        RaibertConfig(
+            hip_lateral_offset_m=0.0 if planar else 0.065,
+            min_lateral_separation_m=0.0 if planar else 0.08,
+            max_lateral_separation_m=0.0 if planar else 0.30,
+        )
+    )
 
 
 class KDWalkController(WalkingBase):
@@ -78,7 +92,7 @@ class KDWalkController(WalkingBase):
         super().__init__(
             robot, terrain, command, schedule, self.config.low_level, self.config.max_accel_mps2
         )
-        self.raibert = walking_raibert(robot.spec.planar)
+        self.raibert = _kd_raibert(robot.spec.planar)
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
@@ -114,6 +128,27 @@ class KDWalkController(WalkingBase):
         c = self.command
         k = self.profile.ramp(t_s - self.t0_s)
         return Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
+
+    def _raibert(self, state: RobotState, foot: str, t_td: float, cmd: Command) -> np.ndarray:
+        """Foothold of ``foot`` touching down ``t_td`` from now: the Raibert heuristic on
+        the terrain's height there."""
+        p = self.raibert.foothold(
+            foot,
+            p_com_world_m=state.com_world_m,
+            v_com_world_mps=state.com_vel_world_mps,
+            cmd_vel_mps=np.array([cmd.vx_mps, cmd.vy_mps]),
+            stance_duration_s=self.schedule.current_step_duration_s,
+            time_to_touchdown_s=t_td,
+            p_stance_foot_world_m=state.foot_pos_world_m[self.schedule.stance_foot],
+            ground_z_m=self.ground_z,
+            yaw_rad=float(state.base_rpy_rad[2]),
+            cmd_yaw_rate_radps=cmd.yaw_rate_radps,
+        )
+        z = self.terrain.foothold_height_m(p[0], p[1], self.ground_z)
+        p[2] = z + self.robot.spec.foot_contact_radius_m
+        if self.robot.spec.planar:
+            p[1] = state.foot_pos_world_m[foot][1]
+        return p
 
     def _path_start(self, state: RobotState) -> np.ndarray:
         """Start of the reference CoM path: the measured CoM moved toward the commanded

@@ -14,34 +14,19 @@ from gaitnet_mpc.command import Command, CommandProfile
 from gaitnet_mpc.control.base import Controller, MomentumPrediction, MPCStats, Telemetry
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.control.terrain_view import TerrainView
-from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, RaibertConfig, RaibertHeuristic
+from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig
 from gaitnet_mpc.geometry import rotate2
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.state import RobotState
 
 
-def walking_raibert(planar: bool) -> RaibertHeuristic:
-    """The Raibert heuristic of the MPC walkers whose footholds the MPC then moves (``kd``,
-    ``wbmpc``): hip offset 0.065 m, feet 0.08-0.30 m apart sideways (none for a biped)."""
-    return RaibertHeuristic(
-        RaibertConfig(
-            hip_lateral_offset_m=0.0 if planar else 0.065,
-            min_lateral_separation_m=0.0 if planar else 0.08,
-            max_lateral_separation_m=0.0 if planar else 0.30,
-        )
-    )
-
-
 class WalkingBase(Controller):
     """Gait schedule, command profile, low-level control and telemetry of a walker.
 
-    Subclasses planning with :meth:`_raibert` set ``self.raibert``. Attributes set by
-    :meth:`reset`: ``t0_s`` (start time [s]), ``profile`` (ramped
+    Attributes set by :meth:`reset`: ``t0_s`` (start time [s]), ``profile`` (ramped
     command and commanded heading), ``com0`` (CoM at the start [m]) and ``ground_z``
     (height of the ground under the feet at the start [m]).
     """
-
-    raibert: RaibertHeuristic  # foothold heuristic, set by a subclass that uses _raibert
 
     def __init__(
         self,
@@ -91,27 +76,6 @@ class WalkingBase(Controller):
             step_end_s=sched.step_start_time_s + sched.current_step_duration_s,
             prediction=self._prediction(),
         )
-
-    def _raibert(self, state: RobotState, foot: str, t_td: float, cmd: Command) -> np.ndarray:
-        """Foothold of ``foot`` touching down ``t_td`` from now: the Raibert heuristic
-        (``self.raibert``, set by the subclass) on the terrain's height there."""
-        p = self.raibert.foothold(
-            foot,
-            p_com_world_m=state.com_world_m,
-            v_com_world_mps=state.com_vel_world_mps,
-            cmd_vel_mps=np.array([cmd.vx_mps, cmd.vy_mps]),
-            stance_duration_s=self.schedule.current_step_duration_s,
-            time_to_touchdown_s=t_td,
-            p_stance_foot_world_m=state.foot_pos_world_m[self.schedule.stance_foot],
-            ground_z_m=self.ground_z,
-            yaw_rad=float(state.base_rpy_rad[2]),
-            cmd_yaw_rate_radps=cmd.yaw_rate_radps,
-        )
-        z = self.terrain.foothold_height_m(p[0], p[1], self.ground_z)
-        p[2] = z + self.robot.spec.foot_contact_radius_m
-        if self.robot.spec.planar:
-            p[1] = state.foot_pos_world_m[foot][1]
-        return p
 
     def _commanded_path_xy(self, t_s: float) -> np.ndarray:
         """(2,) point of the commanded CoM path at ``t_s``: the ramped command integrated
