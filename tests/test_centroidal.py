@@ -9,6 +9,9 @@ import pytest
 
 from gaitnet_mpc.kinematics.centroidal import (
     _euler_maps,  # A_xi, dA_xi and xi of eq. 30 along a trajectory
+    _has_free_flyer,
+    _root_maps,  # the free-flyer block T6 of v = T(xi) xi_dot
+    _rot_rpy,
     centroidal_map,
     centroidal_map_dot,
     centroidal_map_euler,
@@ -84,8 +87,18 @@ def test_pinocchio_time_variation_only_valid_times_v() -> None:
 
 
 # ---------------------------------------------------------------- Euler coordinates
+def _xi_rate(model: pin.Model, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``xi_dot`` with ``v = T(xi) xi_dot``: ``[R v_lin, J_rpy^-1 omega, qdot_j]``."""
+    if not _has_free_flyer(model):
+        return v.copy()
+    rot, rpy = _rot_rpy(q[None, 3:7])
+    t6 = _root_maps(rot, rpy, None)[0][0]
+    return np.concatenate([np.linalg.solve(t6, v[:6]), v[6:]])
+
+
 def test_euler_coordinates_and_map(robot: RobotModel) -> None:
-    """A_xi maps the rate of xi along q (+) t v to h; dA_xi = d/dt A_xi."""
+    """xi_dot (from v = T(xi) xi_dot) is the rate of xi along q (+) t v; A_xi xi_dot = h;
+    dA_xi = d/dt A_xi."""
     model = robot.pin_model
     data = model.createData()
     rng = np.random.default_rng(3)
@@ -93,10 +106,12 @@ def test_euler_coordinates_and_map(robot: RobotModel) -> None:
     for _ in range(10):
         q, v = robot.mj_to_pin(*_random_state(robot, rng))
         q_plus, q_minus = pin.integrate(model, q, v * eps), pin.integrate(model, q, -v * eps)
+        xi_dot = _xi_rate(model, q, v)
         xi_fd = (euler_coordinates(model, q_plus) - euler_coordinates(model, q_minus)) / (2 * eps)
+        np.testing.assert_allclose(xi_dot, xi_fd, rtol=0, atol=1e-6)
         h = f_j2m(model, data, q, v)
         np.testing.assert_allclose(
-            centroidal_map_euler(model, data, q) @ xi_fd, h, rtol=0, atol=1e-6
+            centroidal_map_euler(model, data, q) @ xi_dot, h, rtol=0, atol=1e-10
         )
         d_a_fd = (
             centroidal_map_euler(model, data, q_plus) - centroidal_map_euler(model, data, q_minus)
