@@ -213,6 +213,7 @@ def test_configuration_and_velocity_conventions(humanoid: Setup) -> None:
     quat_sign = np.sign(np.sum(quat * ref.q_ref[:, 3:7], axis=1))[:, None]
     np.testing.assert_allclose(quat * quat_sign, ref.q_ref[:, 3:7], atol=1e-12)
     np.testing.assert_allclose(ref.p_base_ref, ref.q_ref[:, :3])
+    np.testing.assert_allclose(ref.p_base_ref, ref.q_ref[:, :3])
     # yaw rate: body angular velocity (0, 0, 0.5) for an upright trunk
     np.testing.assert_allclose(ref.v_ref[:, 3:6], np.tile([0, 0, 0.5], (11, 1)), atol=1e-9)
     np.testing.assert_allclose(np.diff(ref.yaw_ref_rad), 0.5 * ref.dts_s)
