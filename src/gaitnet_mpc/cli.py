@@ -1,8 +1,10 @@
-"""Command-line interface: ``gaitnet-mpc run | plot | compare``.
+"""Command-line interface: ``gaitnet-mpc run | plot | compare | collect | dataset check``.
 
 * ``run``: simulate one episode and write a run folder (summary, logs, video, plots).
 * ``plot RUN_DIR``: (re)make the PNGs of ``RUN_DIR/plots/`` from the folder's files.
 * ``compare RUN_DIR RUN_DIR ... [--out DIR]``: one figure and one table over several runs.
+* ``collect --out DIR``: the Gait-Net data set by the paper's protocol (resumable).
+* ``dataset check DIR``: validate a data-set folder against its manifest and schema.
 """
 
 from __future__ import annotations
@@ -116,7 +118,114 @@ def _build_parser() -> argparse.ArgumentParser:
     compare.add_argument(
         "--out", type=Path, default=None, help="output folder (default runs/compare-<time>)"
     )
+    _add_collect_parsers(sub)
     return parser
+
+
+def _add_collect_parsers(sub: Any) -> None:
+    from gaitnet_mpc.dataset.collect import BACKENDS
+    from gaitnet_mpc.dataset.protocol import TEACHERS, CollectProtocol
+    from gaitnet_mpc.robots import ROBOTS
+
+    d = CollectProtocol()
+    c = sub.add_parser(
+        "collect",
+        help="collect the Gait-Net data set (paper Sec. IV-A-1); re-run to resume",
+        description="Walk the protocol's sets with the teacher and write one Parquet file per "
+        "set and manifest.json into --out. Re-running the same command skips finished sets.",
+    )
+    c.add_argument("--out", type=Path, required=True, help="data-set folder")
+    c.add_argument("--robot", choices=sorted(ROBOTS), default=d.robot)
+    c.add_argument(
+        "--teacher",
+        choices=TEACHERS,
+        default=d.teacher,
+        help="wbmpc: the whole-body NMPC (the paper's); kd: the kino-dynamic MPC with the "
+        "drawn dts (default: %(default)s)",
+    )
+    c.add_argument("--sets", type=int, default=d.sets, help="number of sets (default: %(default)s)")
+    c.add_argument(
+        "--seconds",
+        type=float,
+        default=d.seconds_total,
+        help="simulated seconds of all sets together, split equally (default: %(default)s)",
+    )
+    c.add_argument("--seed", type=int, default=d.seed, help="protocol seed (default: %(default)s)")
+    c.add_argument(
+        "--course", default=d.course, help="course name or JSON file (default: %(default)s)"
+    )
+    c.add_argument(
+        "--max-restarts",
+        type=int,
+        default=d.max_restarts,
+        help="fresh starts after falls within a set (default: %(default)s)",
+    )
+    c.add_argument("--preset", default=None, help="the teacher's settings preset")
+    c.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one of the teacher's settings (repeatable)",
+    )
+    c.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="sets walked in parallel (default: the machine's cores, %(default)s)",
+    )
+    c.add_argument("--backend", choices=BACKENDS, default="process", help="default: %(default)s")
+    c.add_argument("--address", default=None, help="Ray cluster address (--backend ray)")
+    c.add_argument("--no-progress", action="store_true", help="no progress bar")
+    ds = sub.add_parser("dataset", help="data-set tools")
+    ds_sub = ds.add_subparsers(dest="dataset_cmd", required=True)
+    check = ds_sub.add_parser("check", help="validate a data-set folder")
+    check.add_argument("folder", type=Path, metavar="DIR")
+
+
+def _collect(args: argparse.Namespace) -> int:
+    import shlex
+
+    from gaitnet_mpc.dataset.collect import CollectOptions, collect
+    from gaitnet_mpc.dataset.protocol import CollectProtocol
+
+    protocol = CollectProtocol(
+        robot=args.robot,
+        teacher=args.teacher,
+        sets=args.sets,
+        seconds_total=args.seconds,
+        course=args.course,
+        seed=args.seed,
+        max_restarts=args.max_restarts,
+        teacher_preset=args.preset,
+        teacher_overrides=tuple(args.overrides),
+    )
+    options = CollectOptions(
+        workers=args.workers,
+        backend=args.backend,
+        address=args.address,
+        progress=not args.no_progress,
+    )
+    command_line = shlex.join(["gaitnet-mpc", *args.argv])
+    try:
+        manifest = collect(protocol, args.out, options, command_line)
+    except KeyboardInterrupt:
+        return 130
+    totals = manifest["totals"]
+    print(
+        f"{args.out}: {totals['sets']}/{protocol.sets} sets, {totals['rows']} rows, "
+        f"{totals['falls']} fall(s), {totals['steps_dropped_fall']} step(s) dropped for falls"
+    )
+    return 0
+
+
+def _dataset(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.dataset.check import check_dataset
+
+    result = check_dataset(args.folder)
+    print(f"{args.folder}: OK ({result['files']} files, {result['rows']} rows)")
+    return 0
 
 
 def _has_display() -> bool:
@@ -402,7 +511,9 @@ def _compare(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     # Offscreen rendering backend; must be chosen before mujoco is first imported.
     os.environ.setdefault("MUJOCO_GL", "egl")
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = _build_parser().parse_args(argv)
+    args.argv = argv
     try:
         if args.cmd == "run":
             return _run(args)
@@ -410,6 +521,10 @@ def main(argv: list[str] | None = None) -> int:
             return _plot(args)
         if args.cmd == "compare":
             return _compare(args)
+        if args.cmd == "collect":
+            return _collect(args)
+        if args.cmd == "dataset":
+            return _dataset(args)
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return 2

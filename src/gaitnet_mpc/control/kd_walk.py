@@ -361,6 +361,7 @@ class KDWalkController(WalkingBase):
             com_reference=lambda t: self._com_reference(state, t, cmd),
             j_max=None if full else self.config.replan_j_max,
             choose_dt=full,
+            step_index=sched.step_index,
         )
         try:
             result = self.mpc.solve(problem)

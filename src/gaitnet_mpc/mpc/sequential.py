@@ -91,6 +91,8 @@ class KDProblem:
         j_max: iteration cap (None: ``SequentialConfig.j_max``).
         choose_dt: True at a step start: the solver's dt policy sets the stage durations
             inside the iterations (line 8). False: ``timing`` is kept (Remark 4).
+        step_index: index of the step the horizon starts in (0 = the first step); a
+            policy that gives each step a set dt (:class:`ScheduledDt`) reads it.
     """
 
     q: np.ndarray
@@ -107,6 +109,7 @@ class KDProblem:
     com_reference: Callable[[ReferenceTiming], CoMReference | None] | None = None
     j_max: int | None = None
     choose_dt: bool = False
+    step_index: int = 0
 
 
 class DtPolicy(Protocol):
@@ -135,6 +138,30 @@ class FixedDt:
 
     def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
         return self.dt_s
+
+
+class StepDtSchedule(Protocol):
+    """A dt set per step in advance, e.g.
+    :class:`~gaitnet_mpc.gait.step_durations.StepDurations`."""
+
+    def dt_of_step(self, step_index: int) -> float:
+        """MPC sampling time [s] of step ``step_index``."""
+        ...
+
+
+@dataclass(frozen=True)
+class ScheduledDt:
+    """Each step's dt from a schedule set in advance, blind to the plan: the teacher of
+    data collection (Sec. IV-A-1) with durations drawn per stride."""
+
+    schedule: StepDtSchedule
+
+    @property
+    def nominal_dt_s(self) -> float:
+        return float(self.schedule.dt_of_step(0))
+
+    def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
+        return float(self.schedule.dt_of_step(problem.step_index))
 
 
 @dataclass(frozen=True)
