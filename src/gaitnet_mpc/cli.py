@@ -178,6 +178,26 @@ def _add_collect_parsers(sub: Any) -> None:
     c.add_argument("--backend", choices=BACKENDS, default="process", help="default: %(default)s")
     c.add_argument("--address", default=None, help="Ray cluster address (--backend ray)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
+    t = sub.add_parser(
+        "train",
+        help="train Gait-Net on a data set (needs PyTorch: pip install 'gaitnet-mpc[train]')",
+    )
+    t.add_argument("--data", type=Path, required=True, help="data-set folder (collect --out)")
+    t.add_argument("--features", choices=("pca", "full"), default="pca", help="default: pca")
+    t.add_argument("--out", type=Path, required=True, help="output folder (gaitnet.npz, ...)")
+    t.add_argument("--members", type=int, default=5, help="ensemble size (default: 5)")
+    t.add_argument("--epochs", type=int, default=400, help="most epochs (default: 400)")
+    t.add_argument("--seed", type=int, default=0, help="training and split seed (default: 0)")
+    t.add_argument("--no-progress", action="store_true", help="no progress bar")
+    rep = sub.add_parser("reproduce", help="reproduce a table or figure of the paper")
+    rep.add_argument("what", choices=("table1",), help="table1: Gait-Net feature spaces")
+    rep.add_argument(
+        "--data",
+        type=Path,
+        default=Path("data/gaitnet-kd-humanoid3d"),
+        help="data-set folder (default: %(default)s)",
+    )
+    rep.add_argument("--out", type=Path, default=Path("runs/table1"), help="default: %(default)s")
     ds = sub.add_parser("dataset", help="data-set tools")
     ds_sub = ds.add_subparsers(dest="dataset_cmd", required=True)
     check = ds_sub.add_parser("check", help="validate a data-set folder")
@@ -217,6 +237,35 @@ def _collect(args: argparse.Namespace) -> int:
         f"{args.out}: {totals['sets']}/{protocol.sets} sets, {totals['rows']} rows, "
         f"{totals['falls']} fall(s), {totals['steps_dropped_fall']} step(s) dropped for falls"
     )
+    return 0
+
+
+def _train(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.gaitnet.data import load_dataset
+    from gaitnet_mpc.gaitnet.fit import fit, write_fit
+    from gaitnet_mpc.gaitnet.train import TrainConfig
+
+    config = TrainConfig(members=args.members, epochs=args.epochs, seed=args.seed)
+    data = load_dataset(args.data)
+    result, report, selection = fit(
+        data, args.features, config, split_seed=args.seed, progress=not args.no_progress
+    )
+    write_fit(args.out, result, report, selection)
+    print(
+        f"features {', '.join(report.feature_names)}\n"
+        f"test RMSE of dt {report.test_rmse_s:.2e} s (always the mean: "
+        f"{report.mean_predictor_rmse_s:.2e} s) on sets {list(report.split.test)}\n"
+        f"weights and report in {args.out}/"
+    )
+    return 0
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.gaitnet.table1 import reproduce_table1
+
+    reproduce_table1(args.data, args.out)
+    print((args.out / "table1.md").read_text(), end="")
+    print(f"results in {args.out}/")
     return 0
 
 
@@ -525,6 +574,10 @@ def main(argv: list[str] | None = None) -> int:
             return _collect(args)
         if args.cmd == "dataset":
             return _dataset(args)
+        if args.cmd == "train":
+            return _train(args)
+        if args.cmd == "reproduce":
+            return _reproduce(args)
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,153 @@
+"""From a data-set folder to trained Gait-Net weights and a report (``gaitnet-mpc train``).
+
+The rows are split by set (:func:`~gaitnet_mpc.gaitnet.data.split_by_set`); the feature
+selection (PCA, Sec. IV-A-2) and the standardisation see the training sets only. The
+report compares the test RMSE with the RMSE of always predicting the training mean (what
+the features add), overall and on the pushed steps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gaitnet_mpc.dataset.schema import FEATURE_NAMES
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gaitnet.data import GaitData, SetSplit, split_by_set
+from gaitnet_mpc.gaitnet.features import PCASelection, pca_select
+from gaitnet_mpc.gaitnet.model import GaitNet
+from gaitnet_mpc.gaitnet.train import TrainConfig, TrainResult, train_ensemble
+
+FEATURE_SETS = ("pca", "full")
+
+
+@dataclass
+class FitReport:
+    """What one training produced (``report.json``)."""
+
+    features: str
+    feature_names: tuple[str, ...]
+    split: SetSplit
+    rows: dict[str, int]
+    test_rmse_s: float
+    test_rmse_pushed_s: float | None
+    mean_predictor_rmse_s: float
+    test_spread_median_s: float
+    best_epochs: list[int]
+    train_wall_s: float
+    robot: str
+    teacher: str
+    data_manifest_sha256: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def select_features(data: GaitData, train: np.ndarray, kind: str) -> PCASelection | None:
+    """The PCA selection on the training rows (``kind == "pca"``), or None (all 16)."""
+    if kind not in FEATURE_SETS:
+        raise ConfigError("--features", kind, f"one of {list(FEATURE_SETS)}")
+    if kind == "full":
+        return None
+    return pca_select(data.x[train], FEATURE_NAMES)
+
+
+def fit(
+    data: GaitData,
+    kind: str,
+    config: TrainConfig | None = None,
+    split_seed: int = 0,
+    progress: bool = True,
+) -> tuple[TrainResult, FitReport, PCASelection | None]:
+    """Train on ``data`` with the ``kind`` feature set; evaluate on the held-out sets."""
+    cfg = config or TrainConfig()
+    split = split_by_set(data.set_id, seed=split_seed)
+    part = {name: np.isin(data.set_id, getattr(split, name)) for name in ("train", "val", "test")}
+    selection = select_features(data, part["train"], kind)
+    cols = list(range(len(FEATURE_NAMES))) if selection is None else list(selection.indices)
+    names = tuple(FEATURE_NAMES[i] for i in cols)
+    x = data.x[:, cols]
+    bar, update = _bar(cfg) if progress else (None, None)
+    t0 = time.perf_counter()
+    result = train_ensemble(
+        x[part["train"]],
+        data.y[part["train"]],
+        x[part["val"]],
+        data.y[part["val"]],
+        names,
+        data.dt_range_s,
+        cfg,
+        progress=update,
+        provenance={
+            "data_manifest_sha256": data.manifest_sha256,
+            "robot": data.robot,
+            "teacher": data.teacher,
+        },
+    )
+    wall = time.perf_counter() - t0
+    if bar is not None:
+        bar.close()
+    net = GaitNet(result.weights)
+    test = part["test"]
+    members = net.members_dt(x[test])
+    lo, hi = data.dt_range_s
+    pred = np.clip(members.mean(axis=1), lo, hi)
+    err = pred - data.y[test]
+    pushed = data.pushed[test]
+    report = FitReport(
+        features=kind,
+        feature_names=names,
+        split=split,
+        rows={k: int(v.sum()) for k, v in part.items()},
+        test_rmse_s=_rmse(err),
+        test_rmse_pushed_s=_rmse(err[pushed]) if np.any(pushed) else None,
+        mean_predictor_rmse_s=_rmse(data.y[test] - data.y[part["train"]].mean()),
+        test_spread_median_s=float(np.median(members.std(axis=1))),
+        best_epochs=result.best_epoch,
+        train_wall_s=wall,
+        robot=data.robot,
+        teacher=data.teacher,
+        data_manifest_sha256=data.manifest_sha256,
+    )
+    return result, report, selection
+
+
+def write_fit(
+    out: Path, result: TrainResult, report: FitReport, selection: PCASelection | None
+) -> None:
+    """``gaitnet.npz``, ``report.json``, ``loss.csv`` and ``loss.png`` (and ``fig4.png``
+    for a PCA selection) in ``out``."""
+    from gaitnet_mpc.gaitnet.plots import plot_loadings, plot_loss
+    from gaitnet_mpc.results.io import write_atomic, write_json_atomic
+
+    out.mkdir(parents=True, exist_ok=True)
+    result.weights.save(out / "gaitnet.npz")
+    write_json_atomic(out / "report.json", report.to_dict())
+    lines = ["member,epoch,train_mse,val_mse"]
+    for m, (t, v) in enumerate(zip(result.train_loss, result.val_loss, strict=True)):
+        lines += [f"{m},{e},{a:.6g},{b:.6g}" for e, (a, b) in enumerate(zip(t, v, strict=True))]
+    write_atomic(out / "loss.csv", "\n".join(lines) + "\n")
+    plot_loss(result, out / "loss.png")
+    if selection is not None:
+        plot_loadings(selection, FEATURE_NAMES, out / "fig4.png")
+
+
+def _rmse(err: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(err))))
+
+
+def _bar(cfg: TrainConfig) -> tuple[Any, Any]:
+    from tqdm import tqdm
+
+    bar = tqdm(total=cfg.members * cfg.epochs, unit="epoch", leave=False, mininterval=0.5)
+
+    def update(member: int, epoch: int) -> None:
+        # early stopping skips a member's remaining epochs: the bar jumps over them
+        bar.update(member * cfg.epochs + epoch + 1 - bar.n)
+        bar.set_postfix_str(f"member {member + 1}/{cfg.members}", refresh=False)
+
+    return bar, update

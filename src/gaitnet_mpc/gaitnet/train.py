@@ -1,0 +1,195 @@
+"""Train Gait-Net (paper Sec. IV-A, Fig. 3) with PyTorch; export for NumPy inference.
+
+An ensemble of ``members`` MLPs (``hidden`` units per layer, tanh), each trained from its
+own seed with Adam on the mean squared error of the standardised dt, mini-batches, and
+early stopping on validation sets (the epoch with the lowest validation loss is kept).
+Standardisation is fitted on the training sets only. PyTorch runs single-threaded and
+deterministic, so the same data, split and seed give the same weights.
+
+PyTorch is needed only here (``pip install 'gaitnet-mpc[train]'``); the controller uses
+:class:`~gaitnet_mpc.gaitnet.model.GaitNet`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gaitnet.model import GaitNetWeights
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training settings.
+
+    Attributes:
+        hidden: units of each hidden layer.
+        members: ensemble size (1: a single net, no spread).
+        epochs: most passes over the training rows.
+        patience: stop after this many epochs without a better validation loss.
+        batch_size: rows per Adam step.
+        learning_rate: Adam's step size.
+        weight_decay: L2 penalty (AdamW's decoupled decay).
+        seed: seed of member 0 (member i uses seed + i).
+    """
+
+    hidden: tuple[int, ...] = (32, 32)
+    members: int = 5
+    epochs: int = 400
+    patience: int = 40
+    batch_size: int = 64
+    learning_rate: float = 3e-3
+    weight_decay: float = 1e-4
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.hidden or any(int(h) < 1 for h in self.hidden):
+            raise ConfigError("hidden", self.hidden, "one or more layer sizes >= 1")
+        for name in ("members", "epochs", "patience", "batch_size"):
+            if int(getattr(self, name)) < 1:
+                raise ConfigError(name, getattr(self, name), "an integer >= 1")
+        if not (math.isfinite(self.learning_rate) and self.learning_rate > 0):
+            raise ConfigError("learning_rate", self.learning_rate, "a value > 0")
+
+
+@dataclass
+class TrainResult:
+    """The exported ensemble and each member's loss curves (standardised MSE per epoch)."""
+
+    weights: GaitNetWeights
+    train_loss: list[list[float]] = field(default_factory=list)
+    val_loss: list[list[float]] = field(default_factory=list)
+    best_epoch: list[int] = field(default_factory=list)
+
+
+def _import_torch():  # type: ignore[no-untyped-def]
+    try:
+        import torch
+    except ImportError:
+        raise ConfigError(
+            "training", "PyTorch missing", "pip install 'gaitnet-mpc[train]' (torch==2.13.0)"
+        ) from None
+    return torch
+
+
+def train_ensemble(
+    x_train: np.ndarray,
+    y_train: np.ndarray,
+    x_val: np.ndarray,
+    y_val: np.ndarray,
+    feature_names: tuple[str, ...],
+    dt_clip_s: tuple[float, float],
+    config: TrainConfig | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    provenance: dict[str, str] | None = None,
+) -> TrainResult:
+    """Train ``config.members`` nets on (x_train, y_train [s]); early-stop on the
+    validation rows. ``progress(member, epoch)`` is called after every epoch."""
+    torch = _import_torch()
+    cfg = config or TrainConfig()
+    if len(x_train) < 2 or len(x_val) < 1:
+        raise ConfigError("training rows", (len(x_train), len(x_val)), ">= 2 train, >= 1 val")
+    x_mean = x_train.mean(axis=0)
+    x_std = x_train.std(axis=0)
+    x_std = np.where(x_std > 1e-9, x_std, 1.0)  # constant columns (planar robot) pass through
+    y_mean, y_std = float(y_train.mean()), float(max(y_train.std(), 1e-9))
+    xt = torch.tensor((x_train - x_mean) / x_std, dtype=torch.float64)
+    yt = torch.tensor((y_train - y_mean) / y_std, dtype=torch.float64)[:, None]
+    xv = torch.tensor((x_val - x_mean) / x_std, dtype=torch.float64)
+    yv = torch.tensor((y_val - y_mean) / y_std, dtype=torch.float64)[:, None]
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    result = TrainResult(weights=None)  # type: ignore[arg-type]
+    layers_w: list[list[np.ndarray]] = []
+    layers_b: list[list[np.ndarray]] = []
+    try:
+        torch.use_deterministic_algorithms(True)
+        for member in range(cfg.members):
+            torch.manual_seed(cfg.seed + member)
+            sizes = [x_train.shape[1], *cfg.hidden, 1]
+            modules: list = []
+            for i in range(len(sizes) - 1):
+                modules.append(torch.nn.Linear(sizes[i], sizes[i + 1], dtype=torch.float64))
+                if i < len(sizes) - 2:
+                    modules.append(torch.nn.Tanh())
+            net = torch.nn.Sequential(*modules)
+            opt = torch.optim.AdamW(
+                net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay
+            )
+            gen = torch.Generator().manual_seed(cfg.seed + member)
+            best, best_state, best_epoch, curve_t, curve_v = math.inf, None, 0, [], []
+            for epoch in range(cfg.epochs):
+                net.train()
+                order = torch.randperm(len(xt), generator=gen)
+                total = 0.0
+                for start in range(0, len(xt), cfg.batch_size):
+                    idx = order[start : start + cfg.batch_size]
+                    opt.zero_grad()
+                    loss = torch.mean((net(xt[idx]) - yt[idx]) ** 2)
+                    loss.backward()
+                    opt.step()
+                    total += loss.item() * len(idx)
+                net.eval()
+                with torch.no_grad():
+                    val = float(torch.mean((net(xv) - yv) ** 2))
+                curve_t.append(total / len(xt))
+                curve_v.append(val)
+                if val < best - 1e-9:
+                    best, best_epoch = val, epoch
+                    best_state = {k: v.clone() for k, v in net.state_dict().items()}
+                if progress is not None:
+                    progress(member, epoch)
+                if epoch - best_epoch >= cfg.patience:
+                    break
+            assert best_state is not None
+            net.load_state_dict(best_state)
+            linears = [m for m in net if isinstance(m, torch.nn.Linear)]
+            for i, lin in enumerate(linears):
+                if member == 0:
+                    layers_w.append([])
+                    layers_b.append([])
+                layers_w[i].append(lin.weight.detach().numpy().copy())
+                layers_b[i].append(lin.bias.detach().numpy().copy())
+            result.train_loss.append(curve_t)
+            result.val_loss.append(curve_v)
+            result.best_epoch.append(best_epoch)
+    finally:
+        torch.set_num_threads(threads)
+        torch.use_deterministic_algorithms(False)
+    info = provenance or {}
+    result.weights = GaitNetWeights(
+        weights=tuple(np.stack(w) for w in layers_w),
+        biases=tuple(np.stack(b) for b in layers_b),
+        feature_names=tuple(feature_names),
+        x_mean=x_mean,
+        x_std=x_std,
+        y_mean=y_mean,
+        y_std=y_std,
+        dt_clip_s=dt_clip_s,
+        activation="tanh",
+        data_manifest_sha256=info.get("data_manifest_sha256", ""),
+        robot=info.get("robot", ""),
+        teacher=info.get("teacher", ""),
+    )
+    return result
+
+
+def torch_predict(result: TrainResult, x: np.ndarray) -> np.ndarray:
+    """The ensemble mean dt [s] of ``x`` (n, f) evaluated by PyTorch, from the exported
+    weights (the reference that the NumPy inference must match)."""
+    torch = _import_torch()
+    w = result.weights
+    z = torch.tensor((x - w.x_mean) / w.x_std, dtype=torch.float64)
+    outs = []
+    for k in range(w.members):
+        h = z
+        for i, (wk, bk) in enumerate(zip(w.weights, w.biases, strict=True)):
+            h = torch.nn.functional.linear(h, torch.tensor(wk[k]), torch.tensor(bk[k]))
+            if i < len(w.weights) - 1:
+                h = torch.tanh(h)
+        outs.append(h[:, 0].numpy() * w.y_std + w.y_mean)
+    return np.mean(outs, axis=0)

@@ -1,0 +1,123 @@
+"""Gait-Net: PCA selection, training, NumPy inference against PyTorch, the weights file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitnet_mpc.dataset.schema import FEATURE_NAMES
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gaitnet import GaitNet, GaitNetWeights
+from gaitnet_mpc.gaitnet.data import GaitData, split_by_set
+from gaitnet_mpc.gaitnet.features import pca_select
+from gaitnet_mpc.gaitnet.fit import fit
+from gaitnet_mpc.gaitnet.train import TrainConfig
+
+
+def _synthetic(n_sets: int = 8, rows: int = 60, noise_s: float = 1e-3) -> GaitData:
+    """dt depends on a step length over a speed (as a step's duration does) plus noise."""
+    rng = np.random.default_rng(0)
+    n = n_sets * rows
+    x = rng.normal(size=(n, len(FEATURE_NAMES)))
+    x[:, FEATURE_NAMES.index("com_vx_mps")] = rng.uniform(0.2, 1.0, n)
+    step = rng.uniform(0.05, 0.3, n)
+    x[:, FEATURE_NAMES.index("left_foot_x_m")] = step
+    y = np.clip(0.01 + 0.05 * step / x[:, FEATURE_NAMES.index("com_vx_mps")], 0.03, 0.08)
+    y = y + rng.normal(0.0, noise_s, n)
+    return GaitData(
+        x=x,
+        y=y,
+        set_id=np.repeat(np.arange(n_sets), rows),
+        pushed=rng.random(n) < 0.3,
+        dt_range_s=(0.03, 0.08),
+        manifest_sha256="0" * 64,
+        robot="biped2d",
+        teacher="kd",
+    )
+
+
+def test_pca_picks_one_feature_per_axis_deterministically():
+    rng = np.random.default_rng(1)
+    base = rng.normal(size=(500, 4))
+    x = np.column_stack([base, base[:, :2] @ rng.normal(size=(2, 12))])  # correlated columns
+    x += 0.01 * rng.normal(size=x.shape)
+    a = pca_select(x, FEATURE_NAMES)
+    b = pca_select(x.copy(), FEATURE_NAMES)
+    assert a.names == b.names and np.array_equal(a.loadings, b.loadings)
+    assert len(a.indices) == 6 and len(set(a.indices)) == 6
+    for k, i in enumerate(a.indices):
+        # the pick is the largest loading among features no earlier axis took
+        free = [j for j in range(16) if j not in a.indices[:k]]
+        assert abs(a.loadings[k, i]) == pytest.approx(max(abs(a.loadings[k, free])))
+    assert np.all(np.diff(a.explained) <= 1e-12)
+    np.testing.assert_allclose(np.linalg.norm(a.loadings, axis=1), 1.0)
+
+
+def test_split_holds_out_whole_sets():
+    ids = np.repeat(np.arange(10), 5)
+    s = split_by_set(ids, seed=3)
+    assert set(s.train) | set(s.val) | set(s.test) == set(range(10))
+    assert not (set(s.train) & set(s.test)) and not (set(s.val) & set(s.test))
+    assert split_by_set(ids, seed=3) == s
+    with pytest.raises(ConfigError, match="at least 6 sets"):
+        split_by_set(np.repeat(np.arange(4), 5))
+
+
+def test_training_learns_and_numpy_inference_matches_torch(tmp_path):
+    pytest.importorskip("torch")
+    from gaitnet_mpc.gaitnet.train import torch_predict
+
+    data = _synthetic()
+    cfg = TrainConfig(hidden=(16, 16), members=3, epochs=150, patience=30, seed=0)
+    result, report, _ = fit(data, "full", cfg, progress=False)
+    # the features carry the label: far better than always predicting the mean
+    assert report.test_rmse_s < 0.5 * report.mean_predictor_rmse_s
+    test = np.isin(data.set_id, report.split.test)
+    net = GaitNet(result.weights)
+    np.testing.assert_allclose(
+        net.members_dt(data.x[test]).mean(axis=1), torch_predict(result, data.x[test]), atol=1e-6
+    )
+    # one vector at a time (the controller's call) equals the batch
+    dt0, spread0 = net.predict(data.x[test][0])
+    assert dt0 == pytest.approx(np.clip(net.members_dt(data.x[test][:1]).mean(), 0.03, 0.08))
+    assert spread0 >= 0.0
+
+    # repeatable: the same seed gives the same weights
+    again, _, _ = fit(data, "full", cfg, progress=False)
+    for w1, w2 in zip(result.weights.weights, again.weights.weights, strict=True):
+        np.testing.assert_array_equal(w1, w2)
+
+    path = tmp_path / "w.npz"
+    result.weights.save(path)
+    loaded = GaitNet.load(path)
+    np.testing.assert_array_equal(loaded.members_dt(data.x[:5]), net.members_dt(data.x[:5]))
+    with np.load(path, allow_pickle=False) as f:  # plain arrays only
+        assert "feature_names" in f.files
+
+
+def test_spread_grows_outside_the_training_data():
+    pytest.importorskip("torch")
+    data = _synthetic()
+    cfg = TrainConfig(hidden=(16, 16), members=4, epochs=100, patience=30, seed=0)
+    result, _, _ = fit(data, "full", cfg, progress=False)
+    net = GaitNet(result.weights)
+    inside = np.median([net.predict(x)[1] for x in data.x[:50]])
+    far = np.median([net.predict(8.0 * x)[1] for x in data.x[:50]])
+    assert far > 3.0 * inside
+
+
+def test_weights_file_errors_name_the_problem(tmp_path):
+    with pytest.raises(ConfigError, match=r"existing \.npz"):
+        GaitNetWeights.load(tmp_path / "missing.npz")
+    with pytest.raises(ConfigError, match="activation"):
+        GaitNetWeights(
+            weights=(np.zeros((1, 2, 16)),),
+            biases=(np.zeros((1, 2)),),
+            feature_names=FEATURE_NAMES,
+            x_mean=np.zeros(16),
+            x_std=np.ones(16),
+            y_mean=0.0,
+            y_std=1.0,
+            dt_clip_s=(0.03, 0.08),
+            activation="sigmoid",
+        )
