@@ -48,6 +48,14 @@ def _build_parser() -> argparse.ArgumentParser:
         "(gait/preview.py) instead of the one-step preview",
     )
     run.add_argument(
+        "--gaitnet-weights",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="gaitnet only: Gait-Net weights (.npz from `gaitnet-mpc train`; default: the "
+        "weights shipped for the robot)",
+    )
+    run.add_argument(
         "--preset",
         default=None,
         help="settings preset (gaitnet_mpc/presets/): kd 'default' (tuned, see README "
@@ -373,9 +381,15 @@ def _run(args: argparse.Namespace) -> int:
             raise ConfigError("--dt", args.dt, "a sampling time in [0.03, 0.2] s")
         options["dt_s"] = args.dt
     if args.preview:
-        if args.controller != "kd":
-            raise ConfigError("--preview", args.controller, "the kd controller")
+        if args.controller not in ("kd", "gaitnet"):
+            raise ConfigError("--preview", args.controller, "the kd or gaitnet controller")
         options["preview"] = True
+    if args.gaitnet_weights is not None:
+        if args.controller != "gaitnet":
+            raise ConfigError(
+                "--gaitnet-weights", str(args.gaitnet_weights), "--controller gaitnet"
+            )
+        options["gaitnet_weights"] = str(args.gaitnet_weights)
     if args.preset is not None:
         options["preset"] = args.preset
     if args.config is not None:
@@ -478,7 +492,7 @@ def _config_header(args: argparse.Namespace, robot: str, config: object) -> str:
         "after the preset, --config, --preview / --dt and --set. `--config config.toml`\n"
         'repeats them; "none" stands for None.'
     )
-    if args.controller == "kd":
+    if args.controller in ("kd", "gaitnet"):
         text += (
             "\nsequential.kd.mass_kg and min_foot_separation_m are set from the robot; kd's\n"
             "--dt (its MPC sampling time) is not a setting here and is given again."

@@ -110,6 +110,11 @@ class Controller(ABC):
         """Planned duration of each step the controller started (empty if it does not step)."""
         return []
 
+    def dt_policy_summary(self) -> dict[str, object] | None:
+        """How a learned dt policy decided (``summary.json``'s ``dt_policy``); None: the
+        controller has none."""
+        return None
+
     def telemetry(self) -> Telemetry | None:
         """This tick's telemetry, after :meth:`compute`; None for controllers without a
         gait (e.g. ``stand``)."""

@@ -40,6 +40,7 @@ from gaitnet_mpc.mpc.sequential import (
     KDProblem,
     SequentialKDMPC,
     SequentialResult,
+    StepState,
 )
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
@@ -362,6 +363,7 @@ class KDWalkController(WalkingBase):
             j_max=None if full else self.config.replan_j_max,
             choose_dt=full,
             step_index=sched.step_index,
+            state=StepState(state, stance, swing) if full else None,
         )
         try:
             result = self.mpc.solve(problem)

@@ -37,7 +37,7 @@ class ControllerContext:
 
 def config_type(name: str) -> type | None:
     """The settings dataclass of controller ``name`` (None: it has none)."""
-    if name == "kd":
+    if name in ("kd", "gaitnet"):
         from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 
         return KDWalkConfig
@@ -82,7 +82,9 @@ def controller_config(
                 "--set", overrides[0], f"nothing: the {name} controller has no settings"
             )
         return None
-    config = configio.load_preset(cls, name, preset or "default", planar)
+    # gaitnet is kd with another dt policy: the same settings and presets
+    preset_of = "kd" if name == "gaitnet" else name
+    config = configio.load_preset(cls, preset_of, preset or "default", planar)
     if config_file is not None:
         config = configio.apply(config, configio.read_toml(config_file), f"{config_file}: ")
     if preview and config.preview is None:
@@ -136,6 +138,16 @@ def _kd(ctx: ControllerContext) -> Controller:
     return KDWalkController(ctx.robot, terrain, ctx.command, dt_policy=policy, config=config)
 
 
+def _gaitnet(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController, load_gaitnet
+    from gaitnet_mpc.control.kd_walk_config import walk_terrain
+
+    config = _config("gaitnet", ctx)
+    net = load_gaitnet(ctx.robot, ctx.options.get("gaitnet_weights"))
+    terrain = walk_terrain(ctx.course, config)
+    return GaitNetWalkController(ctx.robot, terrain, ctx.command, net, config)
+
+
 def _wbmpc(ctx: ControllerContext) -> Controller:
     from gaitnet_mpc.control.wbmpc_walk import WBWalkController
 
@@ -144,6 +156,7 @@ def _wbmpc(ctx: ControllerContext) -> Controller:
 
 
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
+    "gaitnet": _gaitnet,
     "kd": _kd,
     "stand": _stand,
     "srbm": _srbm,

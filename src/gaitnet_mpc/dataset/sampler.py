@@ -14,9 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gaitnet_mpc.control.base import Controller
-from gaitnet_mpc.dataset.schema import COLUMNS
-from gaitnet_mpc.geometry import rot2, wrap_angle
-from gaitnet_mpc.robots import FEET
+from gaitnet_mpc.dataset.schema import COLUMNS, FEATURE_NAMES
+from gaitnet_mpc.dataset.step_features import step_features
 from gaitnet_mpc.state import RobotState
 
 
@@ -102,17 +101,11 @@ class StepSampler:
     def _row(self, step: _OpenStep, now: RobotState) -> dict[str, object]:
         """The row of ``step``, finished at the next step start ``now``."""
         s = step.state
-        to_heading = rot2(-self.heading_rad)
         com = s.com_world_m
         stance = s.foot_pos_world_m[step.stance_foot]
+        liftoff = s.foot_pos_world_m[step.swing_foot]
         touchdown = now.foot_pos_world_m[step.swing_foot]
-        where = {step.stance_foot: stance, step.swing_foot: touchdown}
-        com_rel = to_heading @ (com[:2] - stance[:2])
-        v = s.com_vel_world_mps
-        v_h = to_heading @ v[:2]
-        w = s.base_ang_vel_world_radps
-        w_h = to_heading @ w[:2]
-        roll, pitch, yaw = (float(x) for x in s.base_rpy_rad)
+        features = step_features(s, step.stance_foot, step.swing_foot, touchdown, self.heading_rad)
         row: dict[str, object] = {
             "set_id": self.set_id,
             "segment": self._segment,
@@ -131,27 +124,13 @@ class StepSampler:
             "stance_world_x_m": stance[0],
             "stance_world_y_m": stance[1],
             "stance_world_z_m": stance[2],
-            "liftoff_world_x_m": s.foot_pos_world_m[step.swing_foot][0],
-            "liftoff_world_y_m": s.foot_pos_world_m[step.swing_foot][1],
+            "liftoff_world_x_m": liftoff[0],
+            "liftoff_world_y_m": liftoff[1],
             "touchdown_world_x_m": touchdown[0],
             "touchdown_world_y_m": touchdown[1],
             "touchdown_world_z_m": touchdown[2],
-            "com_x_m": com_rel[0],
-            "com_y_m": com_rel[1],
-            "com_z_m": com[2] - stance[2],
-            "com_vx_mps": v_h[0],
-            "com_vy_mps": v_h[1],
-            "com_vz_mps": v[2],
-            "roll_rad": roll,
-            "pitch_rad": pitch,
-            "yaw_rad": float(wrap_angle(yaw - self.heading_rad)),
-            "wx_radps": w_h[0],
-            "wy_radps": w_h[1],
-            "wz_radps": w[2],
+            **dict(zip(FEATURE_NAMES, features, strict=True)),
             "dt_s": step.dt_s,
         }
-        for foot in FEET:
-            rel = to_heading @ (where[foot][:2] - com[:2])
-            row[f"{foot}_foot_x_m"], row[f"{foot}_foot_y_m"] = rel[0], rel[1]
         assert set(row) == {c.name for c in COLUMNS}, "row and schema disagree"
         return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in row.items()}

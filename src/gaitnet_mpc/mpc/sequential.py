@@ -46,6 +46,7 @@ from gaitnet_mpc.mpc.implicit_kd import (
     KDTolerances,
 )
 from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.state import RobotState
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,15 @@ class CoMReference:
 
     p_m: np.ndarray
     v_mps: np.ndarray
+
+
+@dataclass(frozen=True)
+class StepState:
+    """The measured state at a step start, with the step's stance and swing foot."""
+
+    state: RobotState
+    stance_foot: str
+    swing_foot: str
 
 
 @dataclass(frozen=True)
@@ -93,6 +103,9 @@ class KDProblem:
             inside the iterations (line 8). False: ``timing`` is kept (Remark 4).
         step_index: index of the step the horizon starts in (0 = the first step); a
             policy that gives each step a set dt (:class:`ScheduledDt`) reads it.
+        state: the measured state with the stance and swing foot of the step, for a dt
+            policy that reads more than ``q`` and ``v`` (Gait-Net's features); None if the
+            caller gives none.
     """
 
     q: np.ndarray
@@ -110,6 +123,7 @@ class KDProblem:
     j_max: int | None = None
     choose_dt: bool = False
     step_index: int = 0
+    state: StepState | None = None
 
 
 class DtPolicy(Protocol):
@@ -388,7 +402,7 @@ class SequentialKDMPC:
                     timing = timing.with_dts(dts * (dt_new / dt))
                     dts = np.asarray(timing.dts_s, dtype=float)
                     dt, retimed = dt_new, True
-                    touchdowns = _touchdowns(iterate, contact)
+                    touchdowns = planned_touchdowns(iterate, contact)
                     r = self._references(problem, timing, touchdowns)
             if step.converged(cfg.tolerances) and not retimed:
                 converged = True
@@ -427,7 +441,7 @@ class _References:
     com_override: bool
 
 
-def _touchdowns(iterate: KDIterate, contact: np.ndarray) -> dict[str, np.ndarray]:
+def planned_touchdowns(iterate: KDIterate, contact: np.ndarray) -> dict[str, np.ndarray]:
     """foot -> (n, 3) the iterate's footholds of the swings in the horizon, in order."""
     out: dict[str, np.ndarray] = {}
     for i, foot in enumerate(FEET):

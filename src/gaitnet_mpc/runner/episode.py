@@ -266,6 +266,7 @@ def _summarise(
         "foothold_violations": sum(not f["allowed"] for f in footholds),
         "step_durations_s": [round(x, 4) for x in controller.step_durations_s],
         "mpc": None if stats is None else stats.summary(),
+        "dt_policy": controller.dt_policy_summary(),
         "wall_time_s": wall_s,
         "render_time_s": render_wall_s,
         "torque_limits_nm": sorted({float(x) for x in sim.model.actuator_ctrlrange[:, 1]}),

@@ -1,0 +1,57 @@
+"""The 16 Gait-Net features of a step start (:data:`~gaitnet_mpc.dataset.schema.FEATURES`).
+
+One function serves both sides: data collection (with the touchdown the teacher made) and
+the controller (with the touchdown of the current plan), so the network sees at run time
+exactly what it was trained on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitnet_mpc.geometry import rot2, wrap_angle
+from gaitnet_mpc.robots import FEET
+from gaitnet_mpc.state import RobotState
+
+
+def step_features(
+    state: RobotState,
+    stance_foot: str,
+    swing_foot: str,
+    touchdown_m: np.ndarray,
+    heading_rad: float = 0.0,
+) -> np.ndarray:
+    """(16,) features in ``FEATURE_NAMES`` order, from the state at the step start and the
+    swing foot's touchdown ``touchdown_m`` (x, y[, z]) [m], in the frame of
+    ``heading_rad`` (see :mod:`~gaitnet_mpc.dataset.schema`)."""
+    to_heading = rot2(-heading_rad)
+    com = state.com_world_m
+    stance = state.foot_pos_world_m[stance_foot]
+    com_rel = to_heading @ (com[:2] - stance[:2])
+    v = state.com_vel_world_mps
+    v_h = to_heading @ v[:2]
+    w = state.base_ang_vel_world_radps
+    w_h = to_heading @ w[:2]
+    roll, pitch, yaw = (float(x) for x in state.base_rpy_rad)
+    where = {stance_foot: stance[:2], swing_foot: np.asarray(touchdown_m, dtype=float)[:2]}
+    feet = [to_heading @ (where[foot] - com[:2]) for foot in FEET]
+    return np.array(
+        [
+            com_rel[0],
+            com_rel[1],
+            com[2] - stance[2],
+            v_h[0],
+            v_h[1],
+            v[2],
+            roll,
+            pitch,
+            float(wrap_angle(yaw - heading_rad)),
+            w_h[0],
+            w_h[1],
+            w[2],
+            feet[0][0],
+            feet[0][1],
+            feet[1][0],
+            feet[1][1],
+        ]
+    )

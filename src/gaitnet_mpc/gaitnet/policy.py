@@ -1,0 +1,168 @@
+"""Gait-Net as the dt policy of Algorithm 1 (line 8), with the safeguards a network inside
+a fixed-point loop needs.
+
+At a step start every sequential iteration asks the policy for the step's dt. The policy
+builds the features of the step start (:func:`~gaitnet_mpc.dataset.step_features.step_features`)
+from the measured state and the iterate's planned touchdown of the swing foot, and returns
+the network's dt, clipped into the paper's bounds ([0.045, 0.07] s in 3-D, [0.03, 0.06] s
+in 2-D, Sec. V-E1). Two safeguards (paper Sec. VI names the failure: dts that do not
+settle and solves that hit ``j_max``):
+
+* **out of distribution**: when the ensemble's spread exceeds ``max_spread_s`` the input
+  lies outside what the data taught; the step keeps the previous step's dt (the nominal
+  one at the first step) for the rest of this solve;
+* **cycling**: when the last three dt changes alternate in sign, the next dt is the
+  midpoint of the last two; after ``max_damped`` damped iterations the previous step's dt
+  is kept.
+
+Every decision is recorded (``decisions``): time, the dt of each iteration, the spread,
+and the fallback reason if any.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from gaitnet_mpc.dataset.step_features import step_features
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gaitnet.model import GaitNet
+from gaitnet_mpc.mpc.kd_iterate import KDIterate
+from gaitnet_mpc.mpc.sequential import KDProblem, planned_touchdowns
+
+#: Paper Sec. V-E1: dt clipped into [0.045, 0.07] s on the humanoid; Sec. V-C, 2-D: [0.03, 0.06].
+PAPER_DT_BOUNDS_S = {False: (0.045, 0.07), True: (0.03, 0.06)}
+FALLBACKS = ("spread", "cycle")
+
+
+@dataclass(frozen=True)
+class GaitNetPolicyConfig:
+    """Settings of :class:`GaitNetDt`.
+
+    Attributes:
+        dt_bounds_s: (min, max) dt [s]; None: the paper's bounds of the robot.
+        nominal_dt_s: dt of the first step, and the fallback before any step [s].
+        max_spread_s: ensemble spread [s] above which the input counts as unknown.
+        cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
+        max_damped: damped iterations before a cycling solve falls back.
+    """
+
+    dt_bounds_s: tuple[float, float] | None = None
+    nominal_dt_s: float = 0.045
+    max_spread_s: float = 0.006
+    cycle_tolerance_s: float = 5e-4
+    max_damped: int = 3
+
+    def __post_init__(self) -> None:
+        b = self.dt_bounds_s
+        if b is not None and not (0.0 < b[0] <= b[1] and math.isfinite(b[1])):
+            raise ConfigError("dt_bounds_s", b, "(min, max) with 0 < min <= max [s]")
+        for name in ("nominal_dt_s", "max_spread_s", "cycle_tolerance_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ConfigError(name, value, "a value > 0")
+        if self.max_damped < 0:
+            raise ConfigError("max_damped", self.max_damped, "an integer >= 0")
+
+
+@dataclass
+class Decision:
+    """One step start: the dt asked at each iteration and how it ended."""
+
+    t_s: float
+    dts_s: list[float] = field(default_factory=list)
+    spreads_s: list[float] = field(default_factory=list)
+    fallback: str | None = None
+    damped: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "t_s": round(self.t_s, 4),
+            "dts_s": [round(d, 5) for d in self.dts_s],
+            "spread_max_s": round(max(self.spreads_s, default=0.0), 5),
+            "fallback": self.fallback,
+        }
+
+
+class GaitNetDt:
+    """Gait-Net in the dt-policy slot of :class:`~gaitnet_mpc.mpc.sequential.SequentialKDMPC`."""
+
+    def __init__(
+        self, net: GaitNet, planar: bool, config: GaitNetPolicyConfig | None = None
+    ) -> None:
+        self.net = net
+        self.config = config or GaitNetPolicyConfig()
+        self.bounds_s = self.config.dt_bounds_s or PAPER_DT_BOUNDS_S[planar]
+        from gaitnet_mpc.dataset.schema import FEATURE_NAMES
+
+        self._columns = [FEATURE_NAMES.index(n) for n in net.feature_names]
+        self.decisions: list[Decision] = []
+        self._problem: KDProblem | None = None
+        self._last_dt_s = self.config.nominal_dt_s
+
+    @property
+    def nominal_dt_s(self) -> float:
+        return self.config.nominal_dt_s
+
+    def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
+        if problem.state is None:
+            raise ConfigError("KDProblem.state", None, "the step-start state (Gait-Net's input)")
+        if problem is not self._problem:  # a new step start
+            if self.decisions:
+                self._last_dt_s = self.decisions[-1].dts_s[-1]
+            self._problem = problem
+            self.decisions.append(Decision(t_s=problem.state.state.t_s))
+        d = self.decisions[-1]
+        dt = self._choose(problem, iterate, d)
+        d.dts_s.append(dt)
+        return dt
+
+    def _choose(self, problem: KDProblem, iterate: KDIterate, d: Decision) -> float:
+        if d.fallback is not None:
+            return d.dts_s[-1]
+        s = problem.state
+        assert s is not None
+        touchdown = planned_touchdowns(iterate, np.asarray(problem.timing.contact))
+        x = step_features(
+            s.state, s.stance_foot, s.swing_foot, touchdown[s.swing_foot][0], problem.heading_rad
+        )
+        dt, spread = self.net.predict(x[self._columns])
+        d.spreads_s.append(spread)
+        lo, hi = self.bounds_s
+        if spread > self.config.max_spread_s:
+            d.fallback = "spread"
+            return min(max(self._last_dt_s, lo), hi)
+        dt = min(max(dt, lo), hi)
+        if self._cycling([*d.dts_s, dt]):
+            if d.damped >= self.config.max_damped:
+                d.fallback = "cycle"
+                return min(max(self._last_dt_s, lo), hi)
+            d.damped += 1
+            return 0.5 * (d.dts_s[-1] + dt)
+        return dt
+
+    def _cycling(self, dts: list[float]) -> bool:
+        """The last three changes alternate in sign and exceed the tolerance."""
+        if len(dts) < 4:
+            return False
+        steps = np.diff(dts[-4:])
+        if np.any(np.abs(steps) < self.config.cycle_tolerance_s):
+            return False
+        return bool(steps[0] * steps[1] < 0 and steps[1] * steps[2] < 0)
+
+    def summary(self) -> dict[str, Any]:
+        """``summary.json``'s ``dt_policy`` block: counts and every decision."""
+        n = len(self.decisions)
+        counts = {r: sum(d.fallback == r for d in self.decisions) for r in FALLBACKS}
+        iters = [len(d.dts_s) for d in self.decisions]
+        return {
+            "policy": "gaitnet",
+            "decisions": n,
+            "fallbacks": counts,
+            "dt_bounds_s": list(self.bounds_s),
+            "calls_per_decision_mean": float(np.mean(iters)) if iters else None,
+            "steps": [d.to_dict() for d in self.decisions],
+        }
