@@ -595,6 +595,11 @@ def main(argv: list[str] | None = None) -> int:
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Ctrl-C outside the simulation loop (start-up, plotting, training); what a
+        # command had finished is already on disk (every file is written atomically)
+        print("gaitnet-mpc: interrupted", file=sys.stderr)
+        return 130
     return 1
 
 

@@ -1,0 +1,140 @@
+"""``gaitnet`` (Gait-Net choosing each step's dt) beside ``kd`` at fixed dts: success rates.
+
+humanoid3d at 0.75 m/s with the paper's one-step preview. Rows:
+
+* ``flat``: one 20 s run per controller: fall, distance, the dts Gait-Net chose;
+* ``gap`` / ``stepping-stones``: ``--seeds`` randomised layouts (seeds 0..N-1, 8 s each),
+  on which no constant of Gait-Net or its policy was chosen. Clean: no fall, no foothold
+  violation, no leg-leg contact.
+
+Writes ``benchmarks/results/gaitnet_runs.md``. Run::
+
+    .venv/bin/python benchmarks/gaitnet_runs.py [--seeds 20] [--dts 0.045,0.055,0.065] \
+        [--courses gap,stepping-stones] [--weights PATH] [--jobs 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+from machine import machine_info
+
+SEEDED_S = 8.0
+FLAT_S = 20.0
+VX_MPS = 0.75
+
+Job = tuple[str, str, int | None]  # controller ("gaitnet" or "kd@<dt>"), course, seed
+
+
+def run(job: Job, weights: str | None) -> dict:
+    from gaitnet_mpc.command import Command
+    from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.sim.simulator import Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    name, course_name, seed = job
+    robot, command = load_robot("humanoid3d"), Command(VX_MPS)
+    course = load_course(course_name, **({} if seed is None else {"seed": seed}))
+    if name == "gaitnet":
+        options = {} if weights is None else {"gaitnet_weights": weights}
+        ctrl = make_controller("gaitnet", ControllerContext(robot, course, command, options))
+    else:
+        dt = float(name.split("@")[1])
+        ctrl = make_controller("kd", ControllerContext(robot, course, command, {"dt_s": dt}))
+    duration = FLAT_S if course_name == "flat" else SEEDED_S
+    s = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
+    policy = s.get("dt_policy") or {}
+    dts = [d["dts_s"][-1] for d in policy.get("steps", [])]
+    return {
+        "clean": not s["fell"] and s["foothold_violations"] == 0 and not s["self_collisions"],
+        "fell": s["fell"],
+        "fall_time_s": s["fall_time_s"],
+        "distance_m": s["distance_m"],
+        "violations": s["foothold_violations"],
+        "self_collisions": int(s["self_collisions"] or 0),
+        "dts": dts,
+        "fallbacks": sum((policy.get("fallbacks") or {}).values()),
+        "qps": (s.get("mpc") or {}).get("qps_per_full_mean"),
+        "solve_ms": (s.get("mpc") or {}).get("full_ms_median"),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--dts", default="0.045,0.055,0.065", help="kd's fixed dts [s]")
+    parser.add_argument("--courses", default="gap,stepping-stones")
+    parser.add_argument("--weights", default=None, help="Gait-Net weights (default: shipped)")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    names = ["gaitnet"] + [f"kd@{float(d):g}" for d in args.dts.split(",") if d]
+    courses = [c for c in args.courses.split(",") if c]
+    jobs: list[Job] = [(n, "flat", None) for n in names]
+    jobs += [(n, c, s) for n in names for c in courses for s in range(args.seeds)]
+    t0 = time.perf_counter()
+    results: dict[Job, dict] = {}
+    with ProcessPoolExecutor(args.jobs) as pool:
+        futures = {pool.submit(run, job, args.weights): job for job in jobs}
+        for n, fut in enumerate(as_completed(futures), 1):
+            results[futures[fut]] = fut.result()
+            print(f"\r{n}/{len(jobs)} episodes", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    wall_s = time.perf_counter() - t0
+    lines = [
+        "# gaitnet beside kd at fixed dts",
+        "",
+        machine_info(("numpy", "mujoco", "pin", "piqp")),
+        "",
+        f"humanoid3d, {VX_MPS} m/s, one-step preview, self-collision on. Flat: {FLAT_S:.0f} s; "
+        f"gap and stepping-stones: {args.seeds} seeded layouts (0-{args.seeds - 1}), "
+        f"{SEEDED_S:.0f} s each, none used to choose anything. Gait-Net weights: "
+        f"{args.weights or 'shipped'}. Clean: no fall, no violation, no leg-leg contact.",
+        "",
+        "| controller | course | clean | no fall | mean distance [m] | violations "
+        "| chosen dt [s] median (min-max) | fallbacks | QPs per full solve | full solve ms |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for course in ["flat", *courses]:
+        for name in names:
+            rs = [r for (n, c, _), r in results.items() if n == name and c == course]
+            k = len(rs)
+            dts = np.concatenate([r["dts"] for r in rs]) if rs else np.array([])
+            dt_text = f"{np.median(dts):.4f} ({dts.min():.4f}-{dts.max():.4f})" if dts.size else "-"
+            qps = [r["qps"] for r in rs if r["qps"] is not None]
+            ms = [r["solve_ms"] for r in rs if r["solve_ms"] is not None]
+            falls = "" if course != "flat" or not rs[0]["fell"] else f" (t {rs[0]['fall_time_s']})"
+            lines.append(
+                f"| {name} | {course} | {sum(r['clean'] for r in rs)}/{k} | "
+                f"{sum(not r['fell'] for r in rs)}/{k}{falls} | "
+                f"{np.mean([r['distance_m'] for r in rs]):.2f} | "
+                f"{sum(r['violations'] for r in rs)} | {dt_text} | "
+                f"{sum(r['fallbacks'] for r in rs)} | "
+                f"{np.mean(qps) if qps else float('nan'):.1f} | "
+                f"{np.median(ms) if ms else float('nan'):.0f} |"
+            )
+    lines += [
+        "",
+        f"{len(jobs)} episodes in {wall_s / 60:.1f} min on {args.jobs} processes. Command: "
+        f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts {args.dts} "
+        f"--courses {args.courses}" + (f" --weights {args.weights}`." if args.weights else "`."),
+        "",
+    ]
+    report = "\n".join(lines)
+    out = Path(__file__).parent / "results" / "gaitnet_runs.md"
+    tmp = out.with_suffix(".md.part")
+    tmp.write_text(report)
+    os.replace(tmp, out)
+    print(report)
+
+
+if __name__ == "__main__":
+    main()
