@@ -36,7 +36,8 @@ class FitReport:
     test_rmse_s: float
     test_rmse_pushed_s: float | None
     mean_predictor_rmse_s: float
-    test_spread_median_s: float
+    test_spread_median_unpushed_s: float
+    test_spread_median_pushed_s: float | None
     best_epochs: list[int]
     train_wall_s: float
     robot: str
@@ -98,6 +99,7 @@ def fit(
     pred = np.clip(members.mean(axis=1), lo, hi)
     err = pred - data.y[test]
     pushed = data.pushed[test]
+    spread = members.std(axis=1)
     report = FitReport(
         features=kind,
         feature_names=names,
@@ -106,7 +108,8 @@ def fit(
         test_rmse_s=_rmse(err),
         test_rmse_pushed_s=_rmse(err[pushed]) if np.any(pushed) else None,
         mean_predictor_rmse_s=_rmse(data.y[test] - data.y[part["train"]].mean()),
-        test_spread_median_s=float(np.median(members.std(axis=1))),
+        test_spread_median_unpushed_s=float(np.median(spread[~pushed])) if np.any(~pushed) else 0.0,
+        test_spread_median_pushed_s=float(np.median(spread[pushed])) if np.any(pushed) else None,
         best_epochs=result.best_epoch,
         train_wall_s=wall,
         robot=data.robot,

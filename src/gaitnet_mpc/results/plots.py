@@ -76,6 +76,14 @@ def moving_average(t: np.ndarray, x: np.ndarray, window_s: float) -> tuple[np.nd
     return t_mid, avg
 
 
+def _mark_pushes(ax: Any, run: RunFolder) -> None:
+    """Shade the time of every push (``summary.json``'s ``pushes``) on a time axis."""
+    for i, push in enumerate(run.summary.get("pushes") or []):
+        t0, dur = float(push["t_s"]), float(push["dur_s"])
+        label = "push" if i == 0 else None
+        ax.axvspan(t0, t0 + dur, color="tab:orange", alpha=0.3, lw=0, label=label)
+
+
 def _mark_fall(ax: Any, run: RunFolder) -> None:
     t_fall = run.summary.get("fall_time_s")
     if run.summary.get("fell") and t_fall is not None:
@@ -202,7 +210,8 @@ def plot_course_top(run: RunFolder, path: Path) -> Path:
 
 
 def plot_steps(run: RunFolder, path: Path) -> Path:
-    """Step durations, MPC sampling time over time and solve times (Fig. 6d / Fig. 9)."""
+    """Step durations, MPC sampling time over time with pushes shaded, and solve times
+    (Fig. 6d / Fig. 9)."""
     mpc = run.mpc_log
     n_rows = 3 if mpc is not None else 2
     fig = new_figure(9.0, 2.4 * n_rows + 0.6)
@@ -226,7 +235,10 @@ def plot_steps(run: RunFolder, path: Path) -> Path:
         ax.set_ylim(max(0.0, lo - 0.01), hi + 0.01)
     else:
         _note(ax, "no MPC sampling time (no gait schedule)")
+    _mark_pushes(ax, run)
     _mark_fall(ax, run)
+    if run.summary.get("pushes"):
+        ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("MPC dt [s]")
     ax.grid(alpha=0.3)
