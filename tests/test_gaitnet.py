@@ -121,3 +121,27 @@ def test_weights_file_errors_name_the_problem(tmp_path):
             dt_clip_s=(0.03, 0.08),
             activation="sigmoid",
         )
+
+
+@pytest.mark.slow
+def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid):
+    """The shipped weights in Algorithm 1's loop: the humanoid walks 4 s on flat, every
+    step start asked the net inside its iterations, each step lasts h' of its dt and the
+    dts stay inside the paper's bounds."""
+    from gaitnet_mpc.command import Command
+    from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.sim.simulator import Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    course, command = load_course("flat"), Command(0.5)
+    ctrl = make_controller("gaitnet", ControllerContext(humanoid, course, command))
+    summary = run_episode(Simulator(humanoid, course), ctrl, command, 4.0, progress=False)
+    assert not summary["fell"], summary["fall_reason"]
+    assert summary["distance_m"] > 1.2
+    policy = summary["dt_policy"]
+    assert policy["decisions"] == len(summary["step_durations_s"]) >= 10
+    chosen = np.array([d["dts_s"][-1] for d in policy["steps"]])
+    assert np.all((chosen >= 0.045 - 1e-12) & (chosen <= 0.07 + 1e-12))
+    np.testing.assert_allclose(summary["step_durations_s"], 5 * chosen, atol=1e-3)
+    assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
