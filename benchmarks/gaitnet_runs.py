@@ -124,7 +124,7 @@ def main() -> None:
     lines += [
         "",
         f"{len(jobs)} episodes in {wall_s / 60:.1f} min on {args.jobs} processes. Command: "
-        f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts {args.dts} "
+        f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts '{args.dts}' "
         f"--courses {args.courses}" + (f" --weights {args.weights}`." if args.weights else "`."),
         "",
     ]
