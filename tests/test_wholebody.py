@@ -17,6 +17,7 @@ from gaitnet_mpc.mpc.wholebody import (
     make_problem,
     stage_dt,
 )
+from gaitnet_mpc.mpc.wholebody.problem import swing_height_profile
 from gaitnet_mpc.robots import FEET, RobotModel, load_robot
 
 # MuJoCo and the RNEA evaluate the same rigid-body model in double precision: agreement to
@@ -197,13 +198,19 @@ def test_biped_stepping_solution_satisfies_constraints(solver: str) -> None:
     )
     sol = mpc.solve(problem)
     _check_solution(mpc, problem, sol)
-    # Swing clearance (3c): the swing foot's contact point clears the profile.
+    # Swing clearance (3c): the swing foot's contact point clears the profile, and it is
+    # on the ground at its touchdown node (swing in stage k, stance in stage k + 1).
+    touchdowns = 0
     for k in range(problem.horizon_stages):
         p_c = np.array(mpc.dyn.contact_kinematics(sol.qpos[k + 1], sol.qvel[k + 1])[0])
         for fi, foot in enumerate(FEET):
             if not problem.stance[k, fi]:
                 z = p_c[2, mpc.dyn.contact_points_of(foot)]
                 assert np.all(z >= problem.swing_height_min_m[k] - 1e-6)
+                if k + 1 < problem.horizon_stages and problem.stance[k + 1, fi]:
+                    np.testing.assert_allclose(z, problem.ground_z_m, atol=1e-6)
+                    touchdowns += 1
+    assert touchdowns == 2  # right at node 3, left at node 8
 
 
 def test_schedule_and_stage_times() -> None:
@@ -214,6 +221,13 @@ def test_schedule_and_stage_times() -> None:
     assert np.all(stance.sum(axis=1) == 1)
     dt = stage_dt(cfg, phase_stage=3, step_dt_s=(0.05, 0.07))
     assert dt.tolist() == [0.05] * 2 + [0.07] * 8
+    # Swing height bound at node k+1, s = (j + 1) / h' of the swing elapsed: symmetric,
+    # positive inside the swing, zero at the touchdown node (the step's last stage).
+    bound = swing_height_profile(cfg, phase_stage=3)
+    j = (np.arange(cfg.horizon_stages) + 3) % cfg.stages_per_step
+    np.testing.assert_allclose(bound[j == cfg.stages_per_step - 1], 0.0, atol=1e-12)
+    assert np.all(bound[j < cfg.stages_per_step - 1] > 0.02)
+    np.testing.assert_allclose(bound[j == 0], bound[j == cfg.stages_per_step - 2])
 
 
 def test_validation_errors() -> None:

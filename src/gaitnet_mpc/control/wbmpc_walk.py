@@ -12,6 +12,12 @@ Per control tick (1 kHz):
 * apply the first stage's joint torques plus a joint PD toward the predicted state
   (interpolated between nodes 0 and 1 over stage 0).
 
+Every step of the horizon has its own dt (drawn durations are known ahead), the footholds
+of the reference use the duration of the stance after their touchdown, the front foot
+swings first, and the reference returns to the commanded heading and path
+(``heading_return_time_s``, ``lateral_return_time_s``); see
+``docs/design/wholebody_nmpc.md`` for the measurements behind each.
+
 Re-solving once per stage (every 30-80 ms) is the issue's minimum; the solve takes
 ~0.1-0.2 s of CPU on the humanoid, so a 100 Hz re-solve would make data collection about
 3x slower (``benchmarks/results/wbmpc.md``). The reference of eq. 2 is the project's
@@ -30,7 +36,8 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -39,9 +46,10 @@ from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.gait import GaitScheduleConfig, RaibertConfig, RaibertHeuristic
+from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, RaibertConfig, RaibertHeuristic
 from gaitnet_mpc.gait.lip import lip_gains, lip_propagate
 from gaitnet_mpc.gait.step_durations import StepDurations
+from gaitnet_mpc.geometry import heading_axes, rotate2, to_heading2, wrap_angle
 from gaitnet_mpc.kinematics.reference import ReferenceTiming, ReferenceWorkspace, make_reference
 from gaitnet_mpc.mpc.wholebody import (
     WBConfig,
@@ -54,6 +62,16 @@ from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS
 from gaitnet_mpc.mpc.wholebody.problem import swing_height_profile
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
+
+
+class ReferenceVelocity(NamedTuple):
+    """Velocity the reference follows, in the heading frame of the commanded heading:
+    the ramped command plus the return terms (not bounded like a user
+    :class:`~gaitnet_mpc.command.Command`; :func:`make_reference` takes its fields)."""
+
+    vx_mps: float
+    vy_mps: float
+    yaw_rate_radps: float
 
 
 @dataclass(frozen=True)
@@ -71,6 +89,15 @@ class WBWalkConfig:
             on top of the planned torques.
         max_accel_mps2: the command is ramped up from rest at this rate.
         path_max_error_m: the reference path stays within this of the measured base [m].
+        lateral_return_time_s: time constant [s] of the return to the commanded path
+            sideways: the reference (and the footholds) get the lateral velocity
+            ``-e_y / T`` for a CoM ``e_y`` beside the path (heading frame); None: off.
+        heading_return_time_s: time constant [s] of the return to the commanded heading:
+            the reference trunk turns at ``yaw_rate - e_psi / T`` for a heading error
+            ``e_psi``; None: off (the reference then starts at, and keeps, the measured
+            heading, so a heading drift is never undone).
+        lateral_return_max_mps, heading_return_max_radps: bounds of the two return
+            terms (a large error is taken back at this rate).
         stance_half_width_m: lateral CoM-to-foot distance of the LIP sway orbit that the
             footholds of the reference aim at [m].
     """
@@ -83,14 +110,28 @@ class WBWalkConfig:
     max_accel_mps2: float = 1.0
     path_max_error_m: float = 0.03
     stance_half_width_m: float = 0.07
+    lateral_return_time_s: float | None = 0.7
+    heading_return_time_s: float | None = 0.5
+    lateral_return_max_mps: float = 0.2
+    heading_return_max_radps: float = 0.5
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVERS:
             raise ConfigError("solver", self.solver, f"one of {SOLVERS}")
-        for name in ("joint_kp_nm_per_rad", "joint_kd_nms_per_rad", "path_max_error_m"):
+        for name in (
+            "joint_kp_nm_per_rad",
+            "joint_kd_nms_per_rad",
+            "path_max_error_m",
+            "lateral_return_max_mps",
+            "heading_return_max_radps",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ConfigError(name, value, "a finite value >= 0")
+        for name in ("lateral_return_time_s", "heading_return_time_s"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0.0):
+                raise ConfigError(name, value, "None or a finite time > 0 s")
         if not (math.isfinite(self.max_accel_mps2) and self.max_accel_mps2 > 0.0):
             raise ConfigError("max_accel_mps2", self.max_accel_mps2, "a value > 0 m/s^2")
         lo, hi = self.mpc.dt_min_s, self.mpc.dt_max_s
@@ -144,6 +185,9 @@ class WBWalkController(WalkingBase):
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
+        self.schedule = GaitSchedule(
+            replace(self.schedule.config, first_swing_foot=self._first_swing_foot(state))
+        )
         super().reset(state)
         self.liftoff = {f: state.foot_pos_world_m[f].copy() for f in FEET}
         self.plan: WBSolution | None = None
@@ -156,46 +200,95 @@ class WBWalkController(WalkingBase):
         out = super().terrain_knowledge()
         return {**out, "used": "ground height at the start only (flat ground)"}
 
+    def _first_swing_foot(self, state: RobotState) -> str:
+        """The foot that swings first: the one further ahead along the commanded velocity,
+        so that the CoM starts ahead of the stance foot and the first step falls forward.
+
+        The biped starts with its feet 0.16 m apart along x; standing on the front (point)
+        foot with the CoM 7 cm behind it, the first plan fell backward during a long first
+        step (0.375 s: -0.43 m, a fall at 0.77 s at 0.5 m/s). Feet side by side (humanoid),
+        or no commanded velocity: the schedule's default (right)."""
+        default = self.schedule.config.first_swing_foot
+        c = self.command
+        v = np.array([c.vx_mps, c.vy_mps])
+        if float(np.linalg.norm(v)) < 1e-6:
+            return default
+        yaw = float(state.base_rpy_rad[2])
+        direction = rotate2(yaw, v / float(np.linalg.norm(v)))
+        ahead_m = [float(state.foot_pos_world_m[f][:2] @ direction) for f in FEET]
+        if abs(ahead_m[0] - ahead_m[1]) < 0.02:
+            return default
+        return FEET[0] if ahead_m[0] > ahead_m[1] else FEET[1]
+
     # ---------------------------------------------------------------- planning
     def _step_dts(self) -> tuple[float, float]:
-        """dt [s] of the current step and of the next (later steps in the horizon repeat
-        it, as in the gait schedule)."""
+        """dt [s] of the current step and of the next."""
         i = self.schedule.step_index
         d = self.config.step_durations
         return d.dt_of_step(i), d.dt_of_step(i + 1)
 
+    def _timing(self) -> ReferenceTiming:
+        """Stage timing of the horizon with every step's own dt: the schedule knows the
+        current and the next step's, and repeats the next one's for a third step that the
+        horizon reaches inside a step; the drawn durations are known ahead
+        (:class:`~gaitnet_mpc.gait.step_durations.StepDurations`), so that step gets its own."""
+        sched = self.schedule
+        horizon = sched.horizon()
+        timing = ReferenceTiming.from_horizon(horizon, self.config.mpc.stages_per_step)
+        d = self.config.step_durations
+        full = np.array(
+            [d.dt_of_step(sched.step_index + int(k)) for k in horizon.step_index], dtype=float
+        )
+        full[horizon.step_index == 0] = sched.current_step_dt_s
+        dts = full.copy()
+        dts[0] = timing.dts_s[0]
+        return ReferenceTiming(
+            dts_s=dts,
+            contact=timing.contact,
+            time_in_step_s=timing.time_in_step_s,
+            stages_per_step=timing.stages_per_step,
+            full_dts_s=full,
+        )
+
     def _footholds(
-        self, state: RobotState, t_left_s: float, cmd: Command
+        self, state: RobotState, t_left_s: float, cmd: ReferenceVelocity
     ) -> tuple[np.ndarray, np.ndarray]:
         """Footholds (3,) of the swing foot and of the stance foot's next step: the Raibert
         law with the LIP deadbeat gains at the CoM state the LIP predicts for touchdown
         (as ``srbm``, :func:`~gaitnet_mpc.gait.lip.lip_gains`). The geometric hip offset
         instead let the lateral sway grow: feet 0.46 m apart and the legs rolled 0.3-0.5
-        rad within 0.5 s at 1 m/s, then a fall."""
+        rad within 0.5 s at 1 m/s, then a fall.
+
+        Each foothold's gains and half-stride use the duration of the stance that follows
+        its touchdown (steps i+1 and i+2 when step i is under way), and the LIP is
+        propagated over the step in between with its own duration: with drawn durations
+        these differ from the current step's (0.15-0.40 s)."""
         sched, c = self.schedule, self.config
-        step_s = sched.current_step_duration_s
+        i = sched.step_index
+        n = c.mpc.stages_per_step
+        durations_s = [n * c.step_durations.dt_of_step(i + j) for j in (1, 2)]
         z0 = float(state.com_world_m[2]) - self.ground_z
-        omega, k_v, lateral, cmd_scale = lip_gains(z0, step_s, c.stance_half_width_m)
         planar = self.robot.spec.planar
-        raibert = RaibertHeuristic(
-            RaibertConfig(
-                hip_lateral_offset_m=0.0 if planar else lateral,
-                velocity_gain_s=k_v,
-                min_lateral_separation_m=0.0 if planar else 0.08,
-            )
-        )
-        v_cmd = cmd_scale * np.array([cmd.vx_mps, cmd.vy_mps])
         out = []
         p_com, v_com = state.com_world_m[:2], state.com_vel_world_mps[:2]
         p_stance, t_s = state.foot_pos_world_m[sched.stance_foot], t_left_s
-        for foot in (sched.swing_foot, sched.stance_foot):
+        for foot, stance_s in zip((sched.swing_foot, sched.stance_foot), durations_s, strict=True):
+            omega, k_v, lateral, cmd_scale = lip_gains(z0, stance_s, c.stance_half_width_m)
+            raibert = RaibertHeuristic(
+                RaibertConfig(
+                    hip_lateral_offset_m=0.0 if planar else lateral,
+                    velocity_gain_s=k_v,
+                    min_lateral_separation_m=0.0 if planar else 0.08,
+                )
+            )
+            v_cmd = cmd_scale * np.array([cmd.vx_mps, cmd.vy_mps])
             p_com, v_com = lip_propagate(p_com, v_com, p_stance[:2], omega, t_s)
             p = raibert.foothold(
                 foot,
                 p_com_world_m=np.array([p_com[0], p_com[1], state.com_world_m[2]]),
                 v_com_world_mps=v_com,
                 cmd_vel_mps=v_cmd,
-                stance_duration_s=step_s,
+                stance_duration_s=stance_s,
                 time_to_touchdown_s=0.0,
                 p_stance_foot_world_m=p_stance,
                 ground_z_m=self.ground_z,
@@ -206,13 +299,41 @@ class WBWalkController(WalkingBase):
             if planar:
                 p[1] = state.foot_pos_world_m[foot][1]
             out.append(p)
-            p_stance, t_s = p, step_s
+            p_stance, t_s = p, stance_s
         return out[0], out[1]
 
+    def _returning_command(self, state: RobotState, cmd: Command) -> ReferenceVelocity:
+        """The command with the returns to the commanded path and heading (heading frame
+        of the commanded heading): lateral velocity ``vy - e_y / T_lat`` and yaw rate
+        ``omega - e_psi / T_psi`` (``lateral_return_time_s``, ``heading_return_time_s``;
+        as ``kd``'s lateral return, docs/design/lateral_return.md). Without them a heading
+        drift stays in the reference, which starts at the measured heading: before the
+        touchdown fix of :mod:`~gaitnet_mpc.mpc.wholebody.nlp`, 0.94 rad of yaw and 1.3 m
+        beside the path after 15 s at 0.5 m/s (drawn durations), then a fall."""
+        c = self.config
+        if self.robot.spec.planar:
+            return ReferenceVelocity(cmd.vx_mps, cmd.vy_mps, cmd.yaw_rate_radps)
+        heading = self.profile.heading_rad(state.t_s)
+        vy, yaw_rate = cmd.vy_mps, cmd.yaw_rate_radps
+        if c.lateral_return_time_s is not None:
+            offset = state.com_world_m[:2] - self._commanded_path_xy(state.t_s)
+            e_y = float(heading_axes(heading)[1] @ offset)
+            lim = c.lateral_return_max_mps
+            vy += float(np.clip(-e_y / c.lateral_return_time_s, -lim, lim))
+        if c.heading_return_time_s is not None:
+            e_yaw = float(wrap_angle(float(state.base_rpy_rad[2]) - heading))
+            lim = c.heading_return_max_radps
+            yaw_rate += float(np.clip(-e_yaw / c.heading_return_time_s, -lim, lim))
+        return ReferenceVelocity(cmd.vx_mps, vy, yaw_rate)
+
     def _reference(
-        self, state: RobotState, timing: ReferenceTiming, cmd: Command
+        self, state: RobotState, timing: ReferenceTiming, cmd: ReferenceVelocity
     ) -> tuple[np.ndarray, np.ndarray]:
-        """``f_ref`` at nodes 1..h in MuJoCo coordinates: (qpos (h, nq), qvel (h, nv))."""
+        """``f_ref`` at nodes 1..h in MuJoCo coordinates: (qpos (h, nq), qvel (h, nv)).
+
+        ``cmd`` is in the frame of the commanded heading (as the footholds take it);
+        :func:`make_reference` reads the velocity in the frame of the measured trunk
+        heading, so it gets the same world velocity rotated into that frame."""
         sched = self.schedule
         swing, stance = sched.swing_foot, sched.stance_foot
         t_left = sched.time_left_in_step_s
@@ -221,11 +342,16 @@ class WBWalkController(WalkingBase):
         p_com = state.com_world_m.copy()
         p_com[:2] += np.clip(self._commanded_path_xy(state.t_s) - p_com[:2], -lim, lim)
         q, _ = self.robot.mj_to_pin(state.qpos, state.qvel)
+        ref_cmd = cmd
+        if not self.robot.spec.planar:
+            v_world = rotate2(self.profile.heading_rad(state.t_s), (cmd.vx_mps, cmd.vy_mps))
+            vx, vy = to_heading2(float(state.base_rpy_rad[2]), v_world)
+            ref_cmd = ReferenceVelocity(float(vx), float(vy), cmd.yaw_rate_radps)
         ref = make_reference(
             self.robot,
             q,
             timing,
-            cmd,
+            ref_cmd,
             {swing: target[None, :], stance: nxt[None, :]},
             p_foot_now_m=state.foot_pos_world_m,
             p_liftoff_m={swing: self.liftoff[swing]},
@@ -238,11 +364,12 @@ class WBWalkController(WalkingBase):
         return np.stack([n[0] for n in nodes]), np.stack([n[1] for n in nodes])
 
     def _problem(self, state: RobotState, phase_stage: int) -> WBProblem:
-        sched = self.schedule
         k = self.profile.ramp(state.t_s - self.t0_s)
         c = self.command
-        ramped = Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
-        timing = ReferenceTiming.from_horizon(sched.horizon(), self.config.mpc.stages_per_step)
+        ramped = self._returning_command(
+            state, Command(k * c.vx_mps, k * c.vy_mps, c.yaw_rate_radps)
+        )
+        timing = self._timing()
         qpos_ref, qvel_ref = self._reference(state, timing, ramped)
         return WBProblem(
             qpos0=state.qpos.copy(),

@@ -11,7 +11,8 @@ Constraints of stage k:
 * k >= 1: contact kinematics of stage k-1's contact mode on node k (3b/3c): a stance foot's
   contact points are on the ground and do not slide (zero tangential velocity of the toe,
   zero yaw rate of a line foot: the heel's tangential velocity would repeat the toe's
-  along the foot axis); a swing foot's points clear ``swing_height_min_m``;
+  along the foot axis); a swing foot's points clear ``swing_height_min_m``, except at its
+  touchdown node (swing in stage k-1, stance in stage k), where they are on the ground;
 * eq. (4): ``ID(q_k, v_k, a_k, lambda_k) = [0; tau_k]``;
 * contact wrenches (3c): friction pyramid ``|f_t| <= mu f_z`` per point, ``f_min <= sum
   f_z <= f_max`` per stance foot (toe and heel point forces model the line foot's wrench
@@ -174,6 +175,13 @@ class WholeBodyMPC:
                             dp = p_c[0:2, pts[0]] - p_c[0:2, pts[1]]
                             dv = v_c[0:2, pts[0]] - v_c[0:2, pts[1]]
                             add(dp[0] * dv[1] - dp[1] * dv[0], 0.0, 0.0)
+                    elif k < h and key[k][fi]:
+                        # Touchdown at the scheduled node: the foot stands in stage k, so
+                        # its points are on the ground at node k, where stage k's forces
+                        # start to act (with only the lower bound the plan let the foot
+                        # land one stage late, pushing on the ground from up in the air).
+                        for i in pts:
+                            add(p_c[2, i] - ground, 0.0, 0.0)
                     else:
                         for i in pts:
                             add(p_c[2, i] - ground - swing_min[k - 1], 0.0, np.inf)

@@ -175,10 +175,12 @@ def stage_dt(config: WBConfig, phase_stage: int, step_dt_s: Sequence[float]) -> 
 
 def swing_height_profile(config: WBConfig, phase_stage: int) -> np.ndarray:
     """(h,) swing-foot height lower bound at node k+1: ``clearance sin(pi s)``, where
-    ``s = (j + 1) / (h' + 1)`` and j is the stage's index inside its step."""
+    ``s = (j + 1) / h'`` is the fraction of the swing elapsed at that node and j the
+    stage's index inside its step: zero at the touchdown node (s = 1), where the
+    transcription puts the foot on the ground (:mod:`.nlp`)."""
     hp = config.stages_per_step
     j = (np.arange(config.horizon_stages) + phase_stage) % hp
-    return config.swing_clearance_m * np.sin(np.pi * (j + 1) / (hp + 1))
+    return config.swing_clearance_m * np.sin(np.pi * (j + 1) / hp)
 
 
 def reference_trajectory(
