@@ -16,15 +16,13 @@ Writes ``benchmarks/results/gaitnet_runs.md``. Run::
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
 
 import numpy as np
 
-from machine import machine_info
+from machine import machine_info, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -128,12 +126,7 @@ def main() -> None:
         f"--courses {args.courses}" + (f" --weights {args.weights}`." if args.weights else "`."),
         "",
     ]
-    report = "\n".join(lines)
-    out = Path(__file__).parent / "results" / "gaitnet_runs.md"
-    tmp = out.with_suffix(".md.part")
-    tmp.write_text(report)
-    os.replace(tmp, out)
-    print(report)
+    write_report("gaitnet_runs.md", "\n".join(lines))
 
 
 if __name__ == "__main__":

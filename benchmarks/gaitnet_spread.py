@@ -15,7 +15,6 @@ Writes ``benchmarks/results/gaitnet_spread.md``. Run::
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +22,7 @@ import numpy as np
 from gaitnet_mpc.dataset.schema import FEATURE_NAMES
 from gaitnet_mpc.gaitnet import GaitNet
 from gaitnet_mpc.gaitnet.data import load_dataset
-from machine import machine_info
+from machine import machine_info, write_report
 
 
 def main() -> None:
@@ -76,12 +75,7 @@ def main() -> None:
         f"--data {cmd}" + (f" --test-sets {args.test_sets}`." if args.test_sets else "`."),
         "",
     ]
-    report = "\n".join(lines)
-    out = Path(__file__).parent / "results" / "gaitnet_spread.md"
-    tmp = out.with_suffix(".md.part")
-    tmp.write_text(report)
-    os.replace(tmp, out)
-    print(report)
+    write_report("gaitnet_spread.md", "\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -20,13 +20,11 @@ Writes ``benchmarks/results/kd_stones_rate.md``. Run::
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
 
-from machine import machine_info
+from machine import machine_info, write_report
 
 #: Configurations: name -> multi-step preview on (the gap is run without it only).
 CONFIGS = {
@@ -156,12 +154,7 @@ def main() -> None:
         f"{args.seeds} --dts {args.dts} --gap-dts {args.gap_dts} --courses {args.courses}`.",
         "",
     ]
-    report = "\n".join(lines)
-    out = Path(__file__).parent / "results" / "kd_stones_rate.md"
-    tmp = out.with_suffix(".md.part")
-    tmp.write_text(report)
-    os.replace(tmp, out)
-    print(report)
+    write_report("kd_stones_rate.md", "\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import platform
 from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 
 def machine_info(packages: tuple[str, ...] = ("numpy", "mujoco", "pin")) -> str:
@@ -20,3 +21,11 @@ def machine_info(packages: tuple[str, ...] = ("numpy", "mujoco", "pin")) -> str:
         except PackageNotFoundError:
             parts.append(f"{name} (not installed)")
     return ", ".join(parts)
+
+
+def write_report(name: str, report: str) -> None:
+    """Write ``report`` to ``benchmarks/results/<name>`` atomically and print it."""
+    from gaitnet_mpc.results.io import write_atomic
+
+    write_atomic(Path(__file__).parent / "results" / name, report)
+    print(report)
