@@ -328,3 +328,19 @@ def test_a_course_file_that_is_not_utf8_is_a_named_error(tmp_path: Path, capsys)
     course.write_bytes(b'{"name": "\xff\xfe"}')
     assert main(["run", "--course", str(course), "--out", str(tmp_path / "r")]) == 2
     assert "UTF-8" in capsys.readouterr().err
+
+
+def test_gaitnet_options_are_checked(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    argv = ["run", "--controller", "gaitnet", "--robot", "biped2d", "--dt", "0.05"]
+    argv += ["--duration", "0.05", "--out", str(out), "--no-video", "--no-plots", "--no-progress"]
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert any("Gait-Net chooses every step's dt" in w for w in summary["warnings"])
+    assert summary["dt_policy"]["policy"] == "gaitnet"
+    capsys.readouterr()
+    missing = str(tmp_path / "none.npz")
+    assert main([*argv[:5], "--gaitnet-weights", missing, "--out", str(tmp_path / "r2")]) == 2
+    assert "--gaitnet-weights" in capsys.readouterr().err
+    assert main(["run", "--controller", "kd", "--gaitnet-weights", missing]) == 2
+    assert "expected --controller gaitnet" in capsys.readouterr().err

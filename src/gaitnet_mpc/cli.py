@@ -509,6 +509,8 @@ def _ineffective_options(args: argparse.Namespace, planar: bool, pushes: tuple) 
                 out.append(f"{flag} {value:g} has no effect: the stand controller does not walk")
         if args.dt is not None:
             out.append(f"--dt {args.dt:g} has no effect: the stand controller has no MPC")
+    if args.controller == "gaitnet" and args.dt is not None:
+        out.append(f"--dt {args.dt:g} has no effect: Gait-Net chooses every step's dt")
     if planar:
         for flag, value in (("--vy", args.vy), ("--yaw-rate", args.yaw_rate)):
             if value != 0.0:
