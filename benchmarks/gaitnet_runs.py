@@ -16,13 +16,12 @@ Writes ``benchmarks/results/gaitnet_runs.md``. Run::
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from functools import partial
 
 import numpy as np
 
-from machine import machine_info, write_report
+from machine import machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -79,13 +78,7 @@ def main() -> None:
     jobs: list[Job] = [(n, "flat", None) for n in names]
     jobs += [(n, c, s) for n in names for c in courses for s in range(args.seeds)]
     t0 = time.perf_counter()
-    results: dict[Job, dict] = {}
-    with ProcessPoolExecutor(args.jobs) as pool:
-        futures = {pool.submit(run, job, args.weights): job for job in jobs}
-        for n, fut in enumerate(as_completed(futures), 1):
-            results[futures[fut]] = fut.result()
-            print(f"\r{n}/{len(jobs)} episodes", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    results: dict[Job, dict] = run_pool(partial(run, weights=args.weights), jobs, args.jobs)
     wall_s = time.perf_counter() - t0
     lines = [
         "# gaitnet beside kd at fixed dts",

@@ -20,11 +20,9 @@ Writes ``benchmarks/results/kd_stones_rate.md``. Run::
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 
-from machine import machine_info, write_report
+from machine import machine_info, run_pool, write_report
 
 #: Configurations: name -> multi-step preview on (the gap is run without it only).
 CONFIGS = {
@@ -101,13 +99,7 @@ def main() -> None:
     }
     jobs = _jobs(args, dts)
     t0 = time.perf_counter()
-    results: dict[Job, dict] = {}
-    with ProcessPoolExecutor(args.jobs) as pool:
-        futures = {pool.submit(run, job): job for job in jobs}
-        for n, fut in enumerate(as_completed(futures), 1):
-            results[futures[fut]] = fut.result()
-            print(f"\r{n}/{len(jobs)} episodes", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    results: dict[Job, dict] = run_pool(run, jobs, args.jobs)
     wall_s = time.perf_counter() - t0
     lines = [
         "# kd on stepping-stones and gap: success rates",

@@ -197,17 +197,12 @@ def _entry(spec: SetSpec, path: Path, stats: dict[str, Any], wall_s: float | Non
     }
 
 
-def _write_manifest(
-    folder: Path,
-    protocol: CollectProtocol,
-    teacher_toml: str,
-    command_line: str,
-    entries: dict[int, dict[str, Any]],
+def _manifest_header(
+    protocol: CollectProtocol, teacher_toml: str, command_line: str
 ) -> dict[str, Any]:
-    sets = [entries[i] for i in sorted(entries)]
-    stats = [e["stats"] for e in sets]
-    walls = [e["wall_s"] for e in sets if e["wall_s"] is not None]
-    manifest = {
+    """The manifest's fields that do not change while a run collects (provenance asks git
+    once per run, not once per set)."""
+    return {
         "schema_version": SCHEMA_VERSION,
         "format": "parquet",
         "command": command_line,
@@ -218,7 +213,18 @@ def _write_manifest(
         "columns": describe(),
         "features": list(FEATURE_NAMES),
         "label": LABEL.name,
-        "complete": len(sets) == protocol.sets,
+    }
+
+
+def _write_manifest(
+    folder: Path, header: dict[str, Any], n_sets: int, entries: dict[int, dict[str, Any]]
+) -> dict[str, Any]:
+    sets = [entries[i] for i in sorted(entries)]
+    stats = [e["stats"] for e in sets]
+    walls = [e["wall_s"] for e in sets if e["wall_s"] is not None]
+    manifest = {
+        **header,
+        "complete": len(sets) == n_sets,
         "totals": {
             "sets": len(sets),
             "rows": sum(int(s["rows"]) for s in stats),
@@ -296,10 +302,11 @@ def collect(
                 "--out", str(folder), f"a folder of the same protocol (it differs in: {diff})"
             )
         entries = _finished_sets(folder, protocol, manifest, log)
+        header = _manifest_header(protocol, teacher_toml, command_line)
         todo = [s for s in protocol.set_specs() if s.index not in entries]
         if not todo:
             log(f"nothing to do: all {protocol.sets} sets are in {folder}")
-            return _write_manifest(folder, protocol, teacher_toml, command_line, entries)
+            return _write_manifest(folder, header, protocol.sets, entries)
         log(
             f"collecting {len(todo)} of {protocol.sets} sets ({len(entries)} already in "
             f"{folder}), {protocol.seconds_per_set:g} s each, teacher {protocol.teacher}, "
@@ -323,7 +330,7 @@ def collect(
                 path = folder / set_file(spec)
                 write_bytes_atomic(path, data)
                 entries[spec.index] = _entry(spec, path, stats, wall_s)
-                manifest = _write_manifest(folder, protocol, teacher_toml, command_line, entries)
+                manifest = _write_manifest(folder, header, protocol.sets, entries)
                 if bar is not None and options.backend == "ray":
                     bar.update(protocol.seconds_per_set)
                 line = _set_line(spec, stats, wall_s, len(entries), protocol.sets)

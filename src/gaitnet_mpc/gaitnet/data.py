@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitnet_mpc.dataset.check import check_dataset
+from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP
 from gaitnet_mpc.dataset.schema import FEATURE_NAMES, LABEL
 from gaitnet_mpc.dataset.store import MANIFEST, read_manifest
 from gaitnet_mpc.errors import ConfigError
@@ -70,8 +71,6 @@ def load_dataset(folder: Path) -> GaitData:
         for name in (*FEATURE_NAMES, LABEL.name, "set_id", "pushed")
     }
     lo, hi = manifest["protocol"]["duration_range_s"]
-    from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP
-
     return GaitData(
         x=np.column_stack([cols[n] for n in FEATURE_NAMES]).astype(float),
         y=cols[LABEL.name].astype(float),

@@ -101,7 +101,6 @@ class GaitNetDt:
         self._columns = [FEATURE_NAMES.index(n) for n in net.feature_names]
         self.decisions: list[Decision] = []
         self._problem: KDProblem | None = None
-        self._last_dt_s = self.config.nominal_dt_s
 
     @property
     def nominal_dt_s(self) -> float:
@@ -111,8 +110,6 @@ class GaitNetDt:
         if problem.state is None:
             raise ConfigError("KDProblem.state", None, "the step-start state (Gait-Net's input)")
         if problem is not self._problem:  # a new step start
-            if self.decisions:
-                self._last_dt_s = self.decisions[-1].dts_s[-1]
             self._problem = problem
             self.decisions.append(Decision(t_s=problem.state.state.t_s))
         d = self.decisions[-1]
@@ -134,15 +131,21 @@ class GaitNetDt:
         lo, hi = self.bounds_s
         if spread > self.config.max_spread_s:
             d.fallback = "spread"
-            return min(max(self._last_dt_s, lo), hi)
+            return min(max(self._previous_dt_s(), lo), hi)
         dt = min(max(dt, lo), hi)
         if self._cycling([*d.dts_s, dt]):
             if d.damped >= self.config.max_damped:
                 d.fallback = "cycle"
-                return min(max(self._last_dt_s, lo), hi)
+                return min(max(self._previous_dt_s(), lo), hi)
             d.damped += 1
             return 0.5 * (d.dts_s[-1] + dt)
         return dt
+
+    def _previous_dt_s(self) -> float:
+        """The dt the previous step start chose (the nominal dt before the first)."""
+        if len(self.decisions) < 2:
+            return self.config.nominal_dt_s
+        return self.decisions[-2].dts_s[-1]
 
     def _cycling(self, dts: list[float]) -> bool:
         """The last three changes alternate in sign and exceed the tolerance."""

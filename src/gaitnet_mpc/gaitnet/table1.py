@@ -14,14 +14,13 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from gaitnet_mpc.gaitnet.data import load_dataset
 from gaitnet_mpc.gaitnet.fit import FitReport, fit, write_fit
 from gaitnet_mpc.gaitnet.model import GaitNet
-from gaitnet_mpc.gaitnet.train import TrainConfig, TrainResult, torch_predict
+from gaitnet_mpc.gaitnet.train import TrainConfig, TrainResult, torch_members, torch_predict
 
 #: Paper Table I: test RMSE of dt [s] and inference time normalised to the full net.
 PAPER = {"full": (4.98e-3, 1.00), "pca": (6.79e-3, 0.74)}
@@ -51,23 +50,13 @@ def _time_calls(fn, xs: np.ndarray, repeats: int) -> float:  # type: ignore[no-u
 
 
 def _torch_single_call(result: TrainResult):  # type: ignore[no-untyped-def]
-    """The ensemble as one torch module, called on one vector (None: no torch)."""
+    """The ensemble in PyTorch, called on one vector (None: no torch)."""
     try:
         import torch
     except ImportError:
         return None
     w = result.weights
-    nets = []
-    for k in range(w.members):
-        layers: list[Any] = []
-        for i, (wk, bk) in enumerate(zip(w.weights, w.biases, strict=True)):
-            lin = torch.nn.Linear(wk.shape[2], wk.shape[1], dtype=torch.float64)
-            lin.weight.data = torch.tensor(wk[k])
-            lin.bias.data = torch.tensor(bk[k])
-            layers.append(lin)
-            if i < len(w.weights) - 1:
-                layers.append(torch.nn.Tanh())
-        nets.append(torch.nn.Sequential(*layers).eval())
+    nets = torch_members(w)
     mean, std = torch.tensor(w.x_mean), torch.tensor(w.x_std)
 
     def call(x: np.ndarray) -> float:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -110,13 +111,7 @@ def train_ensemble(
         torch.use_deterministic_algorithms(True)
         for member in range(cfg.members):
             torch.manual_seed(cfg.seed + member)
-            sizes = [x_train.shape[1], *cfg.hidden, 1]
-            modules: list = []
-            for i in range(len(sizes) - 1):
-                modules.append(torch.nn.Linear(sizes[i], sizes[i + 1], dtype=torch.float64))
-                if i < len(sizes) - 2:
-                    modules.append(torch.nn.Tanh())
-            net = torch.nn.Sequential(*modules)
+            net = _mlp(torch, [x_train.shape[1], *cfg.hidden, 1])
             opt = torch.optim.AdamW(
                 net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay
             )
@@ -178,18 +173,38 @@ def train_ensemble(
     return result
 
 
+def _mlp(torch: Any, sizes: list[int]) -> Any:
+    """A float64 MLP with tanh between its linear layers of ``sizes``."""
+    modules: list[Any] = []
+    for i in range(len(sizes) - 1):
+        modules.append(torch.nn.Linear(sizes[i], sizes[i + 1], dtype=torch.float64))
+        if i < len(sizes) - 2:
+            modules.append(torch.nn.Tanh())
+    return torch.nn.Sequential(*modules)
+
+
+def torch_members(weights: GaitNetWeights) -> list[Any]:
+    """The ensemble's members as PyTorch modules (eval mode) from exported weights; they
+    take standardised features and return the standardised dt."""
+    torch = _import_torch()
+    sizes = [weights.weights[0].shape[2], *(w.shape[1] for w in weights.weights)]
+    members = []
+    for k in range(weights.members):
+        net = _mlp(torch, sizes)
+        linears = [m for m in net if isinstance(m, torch.nn.Linear)]
+        for lin, w, b in zip(linears, weights.weights, weights.biases, strict=True):
+            lin.weight.data = torch.tensor(w[k])
+            lin.bias.data = torch.tensor(b[k])
+        members.append(net.eval())
+    return members
+
+
 def torch_predict(result: TrainResult, x: np.ndarray) -> np.ndarray:
     """The ensemble mean dt [s] of ``x`` (n, f) evaluated by PyTorch, from the exported
     weights (the reference that the NumPy inference must match)."""
     torch = _import_torch()
     w = result.weights
     z = torch.tensor((x - w.x_mean) / w.x_std, dtype=torch.float64)
-    outs = []
-    for k in range(w.members):
-        h = z
-        for i, (wk, bk) in enumerate(zip(w.weights, w.biases, strict=True)):
-            h = torch.nn.functional.linear(h, torch.tensor(wk[k]), torch.tensor(bk[k]))
-            if i < len(w.weights) - 1:
-                h = torch.tanh(h)
-        outs.append(h[:, 0].numpy() * w.y_std + w.y_mean)
+    with torch.no_grad():
+        outs = [net(z)[:, 0].numpy() * w.y_std + w.y_mean for net in torch_members(w)]
     return np.mean(outs, axis=0)
