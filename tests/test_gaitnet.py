@@ -145,3 +145,88 @@ def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid):
     assert np.all((chosen >= 0.045 - 1e-12) & (chosen <= 0.07 + 1e-12))
     np.testing.assert_allclose(summary["step_durations_s"], 5 * chosen, atol=1e-3)
     assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
+
+
+class _DriftingNet:
+    """A stand-in network whose answer grows by 5 ms per call (the drift of a fixed point
+    that is not attracting), with a set ensemble spread."""
+
+    feature_names = FEATURE_NAMES
+
+    def __init__(self, spread_s: float = 1e-3, step_s: float = 0.005) -> None:
+        self.dt_s, self.spread_s, self.step_s = 0.045, spread_s, step_s
+
+    def predict(self, x: np.ndarray) -> tuple[float, float]:
+        self.dt_s += self.step_s
+        return self.dt_s, self.spread_s
+
+
+def _ask(policy, problem, calls: int) -> list[float]:
+    """The dts the policy gives over ``calls`` iterations of one step start."""
+    out, dt = [], 0.045
+    for _ in range(calls):
+        dt = policy(problem, None, dt)
+        out.append(dt)
+    return out
+
+
+@pytest.fixture
+def _step_start(monkeypatch):
+    """A step-start problem whose features and touchdown do not matter to the stand-in."""
+    from types import SimpleNamespace
+
+    import gaitnet_mpc.gaitnet.policy as policy_module
+
+    monkeypatch.setattr(policy_module, "planned_touchdowns", lambda it, c: {"left": [None]})
+    monkeypatch.setattr(policy_module, "step_features", lambda *a: np.zeros(len(FEATURE_NAMES)))
+    state = SimpleNamespace(state=SimpleNamespace(t_s=0.0), stance_foot="right", swing_foot="left")
+    timing = SimpleNamespace(contact=None)
+    return lambda: SimpleNamespace(state=state, timing=timing, heading_rad=0.0)
+
+
+def test_policy_freezes_a_drifting_dt_after_max_retimes(_step_start):
+    from gaitnet_mpc.gaitnet.policy import GaitNetDt, GaitNetPolicyConfig
+
+    free = GaitNetDt(_DriftingNet(), planar=False)  # type: ignore[arg-type]
+    assert _ask(free, _step_start(), 6)[-1] == pytest.approx(0.07)  # drifts to the bound
+    capped = GaitNetDt(_DriftingNet(), False, GaitNetPolicyConfig(max_retimes=2))  # type: ignore[arg-type]
+    dts = _ask(capped, _step_start(), 6)
+    assert dts == pytest.approx([0.05, 0.055, 0.055, 0.055, 0.055, 0.055])
+    summary = capped.summary()
+    assert summary["frozen"] == 1 and summary["fallbacks"] == {"spread": 0, "cycle": 0}
+
+
+def test_policy_falls_back_on_a_wide_spread(_step_start):
+    from gaitnet_mpc.gaitnet.policy import GaitNetDt
+
+    policy = GaitNetDt(_DriftingNet(spread_s=0.02), planar=False)  # type: ignore[arg-type]
+    assert _ask(policy, _step_start(), 3) == pytest.approx([0.045] * 3)  # the nominal dt
+    assert policy.summary()["fallbacks"]["spread"] == 1
+
+
+@pytest.mark.slow
+def test_oracle_keeps_the_converged_plan_of_lowest_cost(biped):
+    """The grid-search oracle on the biped: every step start tried the whole grid of the
+    paper's 2-D bounds and kept the dt of lowest eq. 18 cost among converged plans; the
+    robot walks."""
+    from gaitnet_mpc.command import Command
+    from gaitnet_mpc.control.oracle_walk import paper_grid_s
+    from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.sim.simulator import Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    course, command = load_course("flat"), Command(0.5)
+    ctrl = make_controller("oracle", ControllerContext(biped, course, command))
+    summary = run_episode(Simulator(biped, course), ctrl, command, 2.0, progress=False)
+    assert not summary["fell"], summary["fall_reason"]
+    grid = paper_grid_s(True)
+    steps = summary["dt_policy"]["steps"]
+    assert len(steps) == len(summary["step_durations_s"]) >= 5
+    for d in steps:
+        costs = np.array([np.nan if c is None else c for c in d["costs"]], dtype=float)
+        assert costs.size == len(grid) and np.isfinite(costs).any()
+        assert d["dts_s"][0] == pytest.approx(grid[int(np.nanargmin(costs))])
+    np.testing.assert_allclose(
+        summary["step_durations_s"], [5 * d["dts_s"][0] for d in steps], atol=1e-3
+    )

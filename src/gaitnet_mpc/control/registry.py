@@ -35,9 +35,13 @@ class ControllerContext:
     config: Any = None
 
 
+#: The controllers that are ``kd`` with another dt policy: the same settings and presets.
+KD_FAMILY = ("kd", "gaitnet", "oracle")
+
+
 def config_type(name: str) -> type | None:
     """The settings dataclass of controller ``name`` (None: it has none)."""
-    if name in ("kd", "gaitnet"):
+    if name in KD_FAMILY:
         from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 
         return KDWalkConfig
@@ -82,8 +86,7 @@ def controller_config(
                 "--set", overrides[0], f"nothing: the {name} controller has no settings"
             )
         return None
-    # gaitnet is kd with another dt policy: the same settings and presets
-    preset_of = "kd" if name == "gaitnet" else name
+    preset_of = "kd" if name in KD_FAMILY else name
     config = configio.load_preset(cls, preset_of, preset or "default", planar)
     if config_file is not None:
         config = configio.apply(config, configio.read_toml(config_file), f"{config_file}: ")
@@ -148,6 +151,15 @@ def _gaitnet(ctx: ControllerContext) -> Controller:
     return GaitNetWalkController(ctx.robot, terrain, ctx.command, net, config)
 
 
+def _oracle(ctx: ControllerContext) -> Controller:
+    from gaitnet_mpc.control.kd_walk_config import walk_terrain
+    from gaitnet_mpc.control.oracle_walk import OracleWalkController
+
+    config = _config("oracle", ctx)
+    terrain = walk_terrain(ctx.course, config)
+    return OracleWalkController(ctx.robot, terrain, ctx.command, config)
+
+
 def _wbmpc(ctx: ControllerContext) -> Controller:
     from gaitnet_mpc.control.wbmpc_walk import WBWalkController
 
@@ -158,6 +170,7 @@ def _wbmpc(ctx: ControllerContext) -> Controller:
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
     "gaitnet": _gaitnet,
     "kd": _kd,
+    "oracle": _oracle,
     "stand": _stand,
     "srbm": _srbm,
     "wbmpc": _wbmpc,

@@ -13,7 +13,13 @@ settle and solves that hit ``j_max``):
   one at the first step) for the rest of this solve;
 * **cycling**: when the last three dt changes alternate in sign, the next dt is the
   midpoint of the last two; after ``max_damped`` damped iterations the previous step's dt
-  is kept.
+  is kept;
+* **drift** (``max_retimes``): the network maps a touchdown back to the dt that made it,
+  and the planner moves the touchdown with the dt, so the fixed point ``dt = net(x,
+  p_td(dt))`` is at best neutrally stable: dts can drift in one direction to a bound
+  (measured, docs/design/gaitnet.md). After ``max_retimes`` changes of the dt the step's
+  dt is frozen and the iterations only converge the plan (not a fallback: counted as
+  ``frozen``).
 
 Every decision is recorded (``decisions``): time, the dt of each iteration, the spread,
 and the fallback reason if any.
@@ -48,6 +54,8 @@ class GaitNetPolicyConfig:
         max_spread_s: ensemble spread [s] above which the input counts as unknown.
         cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
         max_damped: damped iterations before a cycling solve falls back.
+        max_retimes: dt changes per step start before the dt is frozen; None: no limit
+            (Algorithm 1 as printed).
     """
 
     dt_bounds_s: tuple[float, float] | None = None
@@ -55,6 +63,7 @@ class GaitNetPolicyConfig:
     max_spread_s: float = 0.006
     cycle_tolerance_s: float = 5e-4
     max_damped: int = 3
+    max_retimes: int | None = None
 
     def __post_init__(self) -> None:
         b = self.dt_bounds_s
@@ -66,6 +75,8 @@ class GaitNetPolicyConfig:
                 raise ConfigError(name, value, "a value > 0")
         if self.max_damped < 0:
             raise ConfigError("max_damped", self.max_damped, "an integer >= 0")
+        if self.max_retimes is not None and self.max_retimes < 1:
+            raise ConfigError("max_retimes", self.max_retimes, "None or an integer >= 1")
 
 
 @dataclass
@@ -73,10 +84,12 @@ class Decision:
     """One step start: the dt asked at each iteration and how it ended."""
 
     t_s: float
+    start_dt_s: float
     dts_s: list[float] = field(default_factory=list)
     spreads_s: list[float] = field(default_factory=list)
     fallback: str | None = None
     damped: int = 0
+    frozen: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -84,6 +97,7 @@ class Decision:
             "dts_s": [round(d, 5) for d in self.dts_s],
             "spread_max_s": round(max(self.spreads_s, default=0.0), 5),
             "fallback": self.fallback,
+            "frozen": self.frozen,
         }
 
 
@@ -111,15 +125,21 @@ class GaitNetDt:
             raise ConfigError("KDProblem.state", None, "the step-start state (Gait-Net's input)")
         if problem is not self._problem:  # a new step start
             self._problem = problem
-            self.decisions.append(Decision(t_s=problem.state.state.t_s))
+            self.decisions.append(Decision(t_s=problem.state.state.t_s, start_dt_s=dt_s))
         d = self.decisions[-1]
         dt = self._choose(problem, iterate, d)
         d.dts_s.append(dt)
         return dt
 
     def _choose(self, problem: KDProblem, iterate: KDIterate, d: Decision) -> float:
-        if d.fallback is not None:
+        if d.fallback is not None or d.frozen:
             return d.dts_s[-1]
+        limit = self.config.max_retimes
+        if limit is not None and d.dts_s:
+            changes = np.abs(np.diff([d.start_dt_s, *d.dts_s])) > self.config.cycle_tolerance_s
+            if int(np.sum(changes)) >= limit:
+                d.frozen = True
+                return d.dts_s[-1]
         s = problem.state
         assert s is not None
         touchdown = planned_touchdowns(iterate, np.asarray(problem.timing.contact))
@@ -165,6 +185,7 @@ class GaitNetDt:
             "policy": "gaitnet",
             "decisions": n,
             "fallbacks": counts,
+            "frozen": sum(d.frozen for d in self.decisions),
             "dt_bounds_s": list(self.bounds_s),
             "calls_per_decision_mean": float(np.mean(iters)) if iters else None,
             "steps": [d.to_dict() for d in self.decisions],

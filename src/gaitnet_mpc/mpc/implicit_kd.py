@@ -429,6 +429,21 @@ class KDSubproblem:
         lb[cols] = lo[groups] - p_it
         ub[cols] = hi[groups] - p_it
 
+    def plan_cost(self, iterate: KDIterate, states: np.ndarray, inputs: KDInputs) -> float:
+        """Eq. 18 at a plan: ``iterate`` (footholds, CoM path, wrenches) with the predicted
+        ``states`` (h + 1, 12) ``[H; l_G; k_G]``, against the references of ``inputs``
+        (without the proximal term, which vanishes at a converged iterate)."""
+        c = self.config
+        pose, momentum = states[1:, :6], states[1:, 6:]
+        return float(
+            np.sum(np.asarray(c.w_pose) * (pose - inputs.H_ref[1:]) ** 2)
+            + np.sum(np.asarray(c.w_momentum) * (momentum - inputs.h_ref[1:]) ** 2)
+            + np.sum(np.asarray(c.w_p_com) * (iterate.p_com[1:] - inputs.p_com_ref[1:]) ** 2)
+            + c.w_force * np.sum(iterate.f**2)
+            + c.w_moment * np.sum(iterate.tau**2)
+            + np.sum(np.asarray(c.w_p_foot) * (iterate.p_foot - inputs.p_foot_ref) ** 2)
+        )
+
     # ------------------------------------------------------------------ solve
     def solve(self, iterate: KDIterate, inputs: KDInputs) -> KDStep:
         """Build (see :meth:`build`) and solve the CMPC QP; return the search directions.

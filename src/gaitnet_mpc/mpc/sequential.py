@@ -228,6 +228,7 @@ class SequentialResult:
     solve_time_s: float
     last_step: KDStep | None
     step_dt_s: float  # the step's MPC dt the plan was made with (the policy's) [s]
+    cost: float = math.nan  # eq. 18 at the plan (KDSubproblem.plan_cost)
     t_plan_s: float = 0.0
 
     def stage_at(self, t_s: float) -> int:
@@ -374,22 +375,20 @@ class SequentialKDMPC:
         n_qps = 0
         for _ in range(problem.j_max or cfg.j_max):
             sub = self.subproblem
-            step = sub.solve(
+            inputs = sub.inputs(
                 iterate,
-                sub.inputs(
-                    iterate,
-                    x0,
-                    h_ref,
-                    pose_ref,
-                    pf_ref,
-                    r.p_com_ref,
-                    dts,
-                    contact,
-                    problem.foot_yaw_rad,
-                    boxes or None,
-                    p_measured,
-                ),
+                x0,
+                h_ref,
+                pose_ref,
+                pf_ref,
+                r.p_com_ref,
+                dts,
+                contact,
+                problem.foot_yaw_rad,
+                boxes or None,
+                p_measured,
             )
+            step = sub.solve(iterate, inputs)
             n_qps += 1
             alpha = 1.0
             if cfg.relax_after_qps is not None and n_qps > cfg.relax_after_qps:
@@ -425,6 +424,7 @@ class SequentialKDMPC:
             solve_time_s=time.perf_counter() - t0,
             last_step=step,
             step_dt_s=dt,
+            cost=math.nan if step is None else sub.plan_cost(iterate, step.states, inputs),
         )
 
 
