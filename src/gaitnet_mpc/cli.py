@@ -30,22 +30,68 @@ def _build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(prog="gaitnet-mpc", description=__doc__)
     sub = parser.add_subparsers(dest="cmd", required=True)
-    run = sub.add_parser("run", help="simulate one episode and write a run folder")
-    run.add_argument("--robot", choices=sorted(ROBOTS), default="humanoid3d")
-    run.add_argument("--controller", default="stand", help=f"one of {sorted(CONTROLLERS)}")
-    run.add_argument("--course", default="flat", help="built-in course name or path to a JSON file")
-    run.add_argument("--vx", type=float, default=0.0, help="forward velocity command [m/s]")
-    run.add_argument("--vy", type=float, default=0.0, help="lateral velocity command [m/s]")
-    run.add_argument("--yaw-rate", type=float, default=0.0, help="yaw-rate command [rad/s]")
-    run.add_argument("--duration", type=float, default=10.0, help="simulated time [s]")
+    run = sub.add_parser(
+        "run",
+        help="simulate one episode and write a run folder",
+        description="Simulate one episode and write a run folder (summary.json, log.csv, "
+        "mpc_log.csv, events.csv, course.json, config.toml, video.mp4, plots/). The last "
+        "line printed is the outcome: OK, NOT UPRIGHT, FELL or INTERRUPTED, with key numbers.",
+        epilog=_run_epilog(sorted(CONTROLLERS)),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     run.add_argument(
-        "--dt", type=float, default=None, help="fixed MPC sampling time [s] (step = 5 dt)"
+        "--robot", choices=sorted(ROBOTS), default="humanoid3d", help="default: %(default)s"
+    )
+    run.add_argument(
+        "--controller",
+        default="stand",
+        help=f"one of {', '.join(sorted(CONTROLLERS))} (one line each below); default: %(default)s",
+    )
+    run.add_argument(
+        "--course",
+        default="flat",
+        help="a built-in course (one line each below) or a course JSON file (default: %(default)s)",
+    )
+    run.add_argument(
+        "--vx",
+        type=float,
+        default=0.0,
+        help=f"forward velocity command [m/s], in [-{VX_MAX_MPS:g}, {VX_MAX_MPS:g}] "
+        "(default: %(default)s)",
+    )
+    run.add_argument(
+        "--vy",
+        type=float,
+        default=0.0,
+        help=f"lateral velocity command [m/s], in [-{VY_MAX_MPS:g}, {VY_MAX_MPS:g}]; "
+        "humanoid3d only (default: %(default)s)",
+    )
+    run.add_argument(
+        "--yaw-rate",
+        type=float,
+        default=0.0,
+        help=f"yaw-rate command [rad/s], in [-{YAW_RATE_MAX_RADPS:g}, {YAW_RATE_MAX_RADPS:g}]; "
+        "humanoid3d only (default: %(default)s)",
+    )
+    run.add_argument(
+        "--duration",
+        type=float,
+        default=10.0,
+        help=f"simulated time [s], >= {MIN_DURATION_S:g} (default: %(default)s)",
+    )
+    run.add_argument(
+        "--dt",
+        type=float,
+        default=None,
+        help=f"fixed MPC sampling time [s] of kd, srbm, wbmpc, in [{DT_RANGE_S[0]:g}, "
+        f"{DT_RANGE_S[1]:g}] (step = 5 dt; default: each controller's, "
+        f"{DEFAULT_DT_S:g} s)",
     )
     run.add_argument(
         "--preview",
         action="store_true",
-        help="kd only: choose patches and the CoM path with a multi-step LIP footstep plan "
-        "(gait/preview.py) instead of the one-step preview",
+        help="kd, gaitnet, oracle: choose patches and the CoM path with a multi-step LIP "
+        "footstep plan (gait/preview.py) instead of the one-step preview",
     )
     run.add_argument(
         "--gaitnet-weights",
@@ -83,28 +129,30 @@ def _build_parser() -> argparse.ArgumentParser:
         "--push",
         action="append",
         default=[],
-        metavar="t=..,fx=..,fy=..,dur=..",
-        help="impulse at the trunk CoM (repeatable); forces in N (|f| <= 1000 N), times in s "
-        "(dur <= 5 s), impulse |f| dur <= 100 N s",
+        metavar="t=..,fx=..,fy=..,fz=..,dur=..",
+        help="force at the trunk CoM from t for dur seconds (repeatable); t and dur "
+        "required, fx, fy, fz (world frame) default 0; forces in N (|f| <= 1000 N), times "
+        "in s (0 < dur <= 5 s), impulse |f| dur <= 100 N s; e.g. t=2,fy=50,dur=0.2",
     )
     run.add_argument(
         "--payload-kg",
         type=float,
         default=0.0,
-        help="unknown mass on the trunk [kg], at most the robot's own mass",
+        help="unknown mass on the trunk [kg], in [0, 50] and at most the robot's own mass "
+        "(default: %(default)s)",
     )
     run.add_argument(
         "--seed",
         type=int,
         default=None,
-        help="seed of a randomised layout (uneven, stepping-stones, gap); without it the "
-        "built-in layout",
+        help="seed of a randomised layout of uneven, stepping-stones or gap (other courses: "
+        "ignored, with a warning); default: the built-in layout",
     )
     run.add_argument(
         "--out",
-        type=Path,
         default=None,
-        help="run folder, new or empty (default: a new runs/<date-time>-<id>)",
+        help="run folder, new or empty (with --overwrite: one holding an earlier run); "
+        "checked before anything is simulated (default: a new runs/<date-time>-<id>)",
     )
     run.add_argument(
         "--overwrite",
@@ -112,6 +160,18 @@ def _build_parser() -> argparse.ArgumentParser:
         help="allow --out to name a folder holding an earlier run; its files are removed first",
     )
     run.add_argument("--no-video", action="store_true", help="skip the MP4 video")
+    run.add_argument(
+        "--camera",
+        choices=CAMERAS,
+        default="oblique",
+        help="video camera: oblique (a higher follow camera that shows the feet on the "
+        "terrain) or side (the level side view); default: %(default)s",
+    )
+    run.add_argument(
+        "--no-overlay",
+        action="store_true",
+        help="no text overlay (time, commanded vx, the step's MPC dt) on the video",
+    )
     run.add_argument("--no-plots", action="store_true", help="skip the PNGs in plots/")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument(
@@ -124,10 +184,59 @@ def _build_parser() -> argparse.ArgumentParser:
     compare = sub.add_parser("compare", help="compare several run folders (figure + table)")
     compare.add_argument("run_dirs", type=Path, nargs="+", metavar="RUN_DIR")
     compare.add_argument(
-        "--out", type=Path, default=None, help="output folder (default runs/compare-<time>)"
+        "--out", default=None, help="output folder (default runs/compare-<time>-<id>)"
     )
     _add_collect_parsers(sub)
     return parser
+
+
+#: Bounds checked by :class:`~gaitnet_mpc.command.Command` and :func:`_run`, for ``--help``.
+VX_MAX_MPS = 1.5
+VY_MAX_MPS = 0.5
+YAW_RATE_MAX_RADPS = 1.5
+MIN_DURATION_S = 0.01
+DT_RANGE_S = (0.03, 0.2)
+#: Default MPC sampling time of kd, srbm and wbmpc [s] (FixedDt, WalkingConfig,
+#: StepDurations; a test checks they agree).
+DEFAULT_DT_S = 0.045
+CAMERAS = ("oblique", "side")
+
+#: One line per controller for ``run --help``.
+CONTROLLER_HELP = {
+    "stand": "joint PD + gravity compensation, stands still (no MPC; ignores --vx, --dt)",
+    "kd": "the paper's implicit kino-dynamic MPC, fixed dt (default {dt:g} s)",
+    "gaitnet": "kd with Gait-Net choosing every step's dt (ignores --dt)",
+    "oracle": "kd with a grid search choosing every step's dt (slow; ignores --dt)",
+    "srbm": "single-rigid-body MPC with Raibert footholds, fixed dt (default {dt:g} s)",
+    "wbmpc": "whole-body NMPC (the data-set teacher), fixed dt (default {dt:g} s)",
+}
+#: One line per built-in course for ``run --help``.
+COURSE_HELP = {
+    "flat": "flat ground, 25 m",
+    "gap": "ground with holes across the walkway (--seed: random widths)",
+    "stepping-stones": "left-only / right-only stones, the paper's Fig. 7 (--seed: random)",
+    "obstacle": "a box across the walkway, then a hole (fixed layout)",
+    "uneven": "contiguous tiles of random heights (--seed: another draw)",
+}
+
+
+def _run_epilog(controllers: list[str]) -> str:
+    """The controller and course lists below ``run --help``'s options."""
+    from gaitnet_mpc.terrain.builtin_courses import BUILTIN_COURSES
+
+    lines = ["controllers:"]
+    for name in controllers:
+        text = CONTROLLER_HELP.get(name, "(see its module docstring)").format(dt=DEFAULT_DT_S)
+        lines.append(f"  {name:<16} {text}")
+    lines.append("courses:")
+    for name in BUILTIN_COURSES:
+        lines.append(f"  {name:<16} {COURSE_HELP.get(name, '')}")
+    lines.append(
+        "outcome line: OK (ended upright), NOT UPRIGHT (no fall, but the end state is past\n"
+        "  half the fall detector's tilt or CoM-height margin), FELL, INTERRUPTED (Ctrl-C or\n"
+        "  SIGTERM: what was simulated is saved, exit status 130)"
+    )
+    return "\n".join(lines)
 
 
 def _add_collect_parsers(sub: Any) -> None:
@@ -198,14 +307,24 @@ def _add_collect_parsers(sub: Any) -> None:
     t.add_argument("--seed", type=int, default=0, help="training and split seed (default: 0)")
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
     rep = sub.add_parser("reproduce", help="reproduce a table or figure of the paper")
-    rep.add_argument("what", choices=("table1",), help="table1: Gait-Net feature spaces")
+    rep.add_argument(
+        "what",
+        choices=("table1", "table2"),
+        help="table1: Gait-Net feature spaces; table2: solvers on the same MPC problems",
+    )
     rep.add_argument(
         "--data",
         type=Path,
         default=Path("data/gaitnet-kd-humanoid3d"),
         help="data-set folder (default: %(default)s)",
     )
-    rep.add_argument("--out", type=Path, default=Path("runs/table1"), help="default: %(default)s")
+    rep.add_argument("--out", type=Path, default=None, help="default: runs/<what>")
+    rep.add_argument(
+        "--problems",
+        type=int,
+        default=40,
+        help="table2: recorded MPC problems to solve, >= 1 (default: %(default)s)",
+    )
     ds = sub.add_parser("dataset", help="data-set tools")
     ds_sub = ds.add_subparsers(dest="dataset_cmd", required=True)
     check = ds_sub.add_parser("check", help="validate a data-set folder")
@@ -269,11 +388,20 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from gaitnet_mpc.gaitnet.table1 import reproduce_table1
+    out = args.out if args.out is not None else Path("runs") / args.what
+    if args.what == "table2":
+        from gaitnet_mpc.table2.run import reproduce_table2
 
-    reproduce_table1(args.data, args.out)
-    print((args.out / "table1.md").read_text(), end="")
-    print(f"results in {args.out}/")
+        if args.problems < 1:
+            raise ConfigError("--problems", args.problems, "an integer >= 1")
+        report = reproduce_table2(out, args.problems)
+        print(report.read_text(), end="")
+    else:
+        from gaitnet_mpc.gaitnet.table1 import reproduce_table1
+
+        reproduce_table1(args.data, out)
+        print((out / "table1.md").read_text(), end="")
+    print(f"results in {out}/")
     return 0
 
 
@@ -361,28 +489,27 @@ def _run(args: argparse.Namespace) -> int:
     from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
     from gaitnet_mpc.terrain import SEEDED_COURSES, load_course
 
-    if not (math.isfinite(args.duration) and args.duration >= 0.01):
-        raise ConfigError("--duration", args.duration, "a simulated time >= 0.01 s")
+    if not (math.isfinite(args.duration) and args.duration >= MIN_DURATION_S):
+        raise ConfigError("--duration", args.duration, f"a simulated time >= {MIN_DURATION_S:g} s")
     if args.viewer:
         _check_viewer()
     command = Command(args.vx, args.vy, args.yaw_rate)
     pushes = tuple(Push.parse(p) for p in args.push)
     robot = load_robot(args.robot)
     check_payload(args.payload_kg, robot.total_mass_kg, "--payload-kg")
-    params = {} if args.seed is None else {"seed": args.seed}
-    if params and args.course not in SEEDED_COURSES:
-        raise ConfigError(
-            "--seed", args.seed, "a course with a randomised layout (uneven, stepping-stones, gap)"
-        )
-    course = load_course(args.course, **params)
+    seeded = args.seed is not None and args.course in SEEDED_COURSES
+    course = load_course(args.course, **({"seed": args.seed} if seeded else {}))
     options = {}
     if args.dt is not None:
-        if not (0.03 <= args.dt <= 0.2):
-            raise ConfigError("--dt", args.dt, "a sampling time in [0.03, 0.2] s")
+        lo, hi = DT_RANGE_S
+        if not (lo <= args.dt <= hi):
+            raise ConfigError("--dt", args.dt, f"a sampling time in [{lo:g}, {hi:g}] s")
         options["dt_s"] = args.dt
     if args.preview:
-        if args.controller not in ("kd", "gaitnet"):
-            raise ConfigError("--preview", args.controller, "the kd or gaitnet controller")
+        from gaitnet_mpc.control.registry import KD_FAMILY
+
+        if args.controller not in KD_FAMILY:
+            raise ConfigError("--preview", args.controller, f"one of {', '.join(KD_FAMILY)}")
         options["preview"] = True
     if args.gaitnet_weights is not None:
         if args.controller != "gaitnet":
@@ -418,7 +545,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     if config is not None:
         write_atomic(out / CONFIG, dumps(config, _config_header(args, robot.name, config)))
-    warnings = _ineffective_options(args, robot.spec.planar, pushes)
+    warnings = _ineffective_options(args, robot.spec.planar, pushes, SEEDED_COURSES)
     for text in warnings:
         print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     meta = {
@@ -435,9 +562,8 @@ def _run(args: argparse.Namespace) -> int:
         "seed": args.seed,
         "terrain_knowledge": controller.terrain_knowledge(),
     }
-    video = None if args.no_video else VideoConfig()
+    video = None if args.no_video else VideoConfig(camera=args.camera, overlay=not args.no_overlay)
     viewer = _open_viewer(sim, robot.spec.trunk_body) if args.viewer else None
-    previous_sigterm = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
     try:
         summary = run_episode(
             sim,
@@ -451,21 +577,32 @@ def _run(args: argparse.Namespace) -> int:
             viewer=viewer,
         )
     finally:
-        signal.signal(signal.SIGTERM, previous_sigterm)
         if viewer is not None:
             viewer.close()
     plots_s = None
+    plots_interrupted = False
     if not args.no_plots:
         from gaitnet_mpc.results.plots import make_plots
 
         t0 = time.perf_counter()
-        make_plots(out)
+        try:
+            make_plots(out)
+        except KeyboardInterrupt:  # the run is saved; `gaitnet-mpc plot` remakes the plots
+            plots_interrupted = True
+            print(
+                f"gaitnet-mpc: plotting interrupted; `gaitnet-mpc plot {out}` makes the plots",
+                file=sys.stderr,
+            )
         plots_s = time.perf_counter() - t0
     brief = {
         k: summary[k]
         for k in (
+            "outcome",
             "fell",
             "fall_time_s",
+            "ended_upright",
+            "final_tilt_rad",
+            "final_com_height_m",
             "distance_m",
             "mean_speed_mps",
             "speed_rmse_mps",
@@ -481,7 +618,7 @@ def _run(args: argparse.Namespace) -> int:
     print(f"wall time: {timing}")
     print(f"results in {out}/")
     print(_outcome_line(summary))
-    return 130 if summary["interrupted"] else 0
+    return 130 if summary["interrupted"] or plots_interrupted else 0
 
 
 def _config_header(args: argparse.Namespace, robot: str, config: object) -> str:
@@ -492,7 +629,7 @@ def _config_header(args: argparse.Namespace, robot: str, config: object) -> str:
         "after the preset, --config, --preview / --dt and --set. `--config config.toml`\n"
         'repeats them; "none" stands for None.'
     )
-    if args.controller in ("kd", "gaitnet"):
+    if args.controller in ("kd", "gaitnet", "oracle"):
         text += (
             "\nsequential.kd.mass_kg and min_foot_separation_m are set from the robot; kd's\n"
             "--dt (its MPC sampling time) is not a setting here and is given again."
@@ -500,9 +637,17 @@ def _config_header(args: argparse.Namespace, robot: str, config: object) -> str:
     return text
 
 
-def _ineffective_options(args: argparse.Namespace, planar: bool, pushes: tuple) -> list[str]:
-    """Options given that will have no effect on this run (printed and recorded)."""
+def _ineffective_options(
+    args: argparse.Namespace, planar: bool, pushes: tuple, seeded_courses: frozenset[str]
+) -> list[str]:
+    """Options given that will have no effect on this run (printed to stderr and recorded
+    in ``summary.json``'s ``warnings``)."""
     out = []
+    if args.seed is not None and args.course not in seeded_courses:
+        out.append(
+            f"--seed {args.seed} has no effect: course {args.course!r} has a fixed layout "
+            f"(seeded courses: {', '.join(sorted(seeded_courses))})"
+        )
     if args.controller == "stand":
         for flag, value in (("--vx", args.vx), ("--vy", args.vy), ("--yaw-rate", args.yaw_rate)):
             if value != 0.0:
@@ -511,11 +656,17 @@ def _ineffective_options(args: argparse.Namespace, planar: bool, pushes: tuple) 
             out.append(f"--dt {args.dt:g} has no effect: the stand controller has no MPC")
     if args.controller == "gaitnet" and args.dt is not None:
         out.append(f"--dt {args.dt:g} has no effect: Gait-Net chooses every step's dt")
+    if args.controller == "oracle" and args.dt is not None:
+        out.append(f"--dt {args.dt:g} has no effect: the oracle chooses every step's dt")
+    if args.no_video and (args.camera != "oblique" or args.no_overlay):
+        out.append("--camera / --no-overlay have no effect with --no-video")
     if planar:
         for flag, value in (("--vy", args.vy), ("--yaw-rate", args.yaw_rate)):
             if value != 0.0:
                 out.append(f"{flag} {value:g} has no effect on the planar robot")
-    for push in pushes:
+    for i, push in enumerate(pushes):
+        if push in pushes[:i]:
+            out.append(f"--push {args.push[i]} is given twice: both are applied (twice the force)")
         if push.t_s >= args.duration:
             out.append(
                 f"--push at t = {push.t_s:g} s has no effect: the run ends at {args.duration:g} s"
@@ -531,16 +682,21 @@ def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
 def _outcome_line(summary: dict[str, Any]) -> str:
     """One line that says how the run ended: OK, FELL or INTERRUPTED, with key numbers."""
     t = summary["duration_s"]
+    drop_m = summary["com_height0_m"] - summary["final_com_height_m"]
     numbers = (
         f"{summary['distance_m']:.2f} m in {t:.2f} s, "
         f"{summary['foothold_violations']} foothold violations, "
         f"{summary['self_collisions']} ticks of leg contact, "
-        f"final tilt {summary['final_tilt_rad']:.2f} rad"
+        f"final tilt {summary['final_tilt_rad']:.2f} rad, "
+        f"final CoM height {summary['final_com_height_m']:.3f} m "
+        f"({abs(drop_m) * 100:.1f} cm {'below' if drop_m >= 0 else 'above'} the start)"
     )
     if summary["interrupted"]:
         return f"INTERRUPTED at t = {t:.3f} s: {numbers}"
     if summary["fell"]:
         return f"FELL at t = {summary['fall_time_s']:.3f} s ({summary['fall_reason']}): {numbers}"
+    if not summary["ended_upright"]:
+        return f"NOT UPRIGHT at the end (t = {t:.3f} s, no fall detected): {numbers}"
     return f"OK: {numbers}"
 
 
@@ -581,7 +737,12 @@ def main(argv: list[str] | None = None) -> int:
     args.argv = argv
     try:
         if args.cmd == "run":
-            return _run(args)
+            # SIGTERM stops a run like Ctrl-C, from start-up through plotting
+            previous_sigterm = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+            try:
+                return _run(args)
+            finally:
+                signal.signal(signal.SIGTERM, previous_sigterm)
         if args.cmd == "plot":
             return _plot(args)
         if args.cmd == "compare":

@@ -4,8 +4,11 @@
 
 * ``compare.png``: forward velocity against the command over time (0.25 s moving
   average, falls marked with an X), step durations per step, the distribution of MPC
-  solve times per run, and the distance each run covered (fallen runs hatched).
-* ``compare.md`` and ``compare.csv``: one row per run with :data:`TABLE_COLUMNS`.
+  solve times per run, and each run's mean forward speed, its distance divided by its
+  duration, so runs of different durations compare (fallen runs hatched).
+* ``compare.md`` and ``compare.csv``: one row per run with :data:`TABLE_COLUMNS`: the
+  duration, the median MPC sampling time (``dt_s_median``, from ``log.csv``; empty
+  without a gait) and whether the multi-step preview was on, next to the outcome.
 
 Only the run folders' files are read (see :mod:`gaitnet_mpc.results.rundir`).
 """
@@ -31,6 +34,10 @@ TABLE_COLUMNS: tuple[str, ...] = (
     "robot",
     "controller",
     "course",
+    "duration_s",
+    "dt_s_median",
+    "preview",
+    "outcome",
     "fell",
     "fall_time_s",
     "distance_m",
@@ -44,6 +51,8 @@ TABLE_COLUMNS: tuple[str, ...] = (
 )
 
 _FORMATS = {
+    "duration_s": "{:.2f}",
+    "dt_s_median": "{:.3f}",
     "fall_time_s": "{:.3f}",
     "distance_m": "{:.3f}",
     "mean_speed_mps": "{:.3f}",
@@ -68,11 +77,18 @@ def table_row(run: RunFolder, label: str) -> dict[str, Any]:
     """The table row of one run (None where a value does not apply)."""
     s = run.summary
     mpc = s.get("mpc") or {}
+    dt = run.column("mpc_dt_s")
+    dt_ok = dt[np.isfinite(dt)] if dt is not None else np.zeros(0)
+    options = s.get("controller_options") or {}
     return {
         "run": label,
         "robot": s.get("robot"),
         "controller": s.get("controller"),
         "course": s.get("course"),
+        "duration_s": s.get("duration_s"),
+        "dt_s_median": float(np.median(dt_ok)) if dt_ok.size else None,
+        "preview": bool(options.get("preview", False)),
+        "outcome": s.get("outcome"),
         "fell": bool(s.get("fell")),
         "fall_time_s": s.get("fall_time_s"),
         "distance_m": s.get("distance_m"),
@@ -128,6 +144,8 @@ def table_markdown(rows: Sequence[dict[str, Any]]) -> str:
 
 def plot_compare(runs: Sequence[RunFolder], labels: Sequence[str], path: Path) -> Path:
     """The comparison figure (see the module docstring)."""
+    from matplotlib.ticker import MaxNLocator
+
     fig = new_figure(12.0, 8.0)
     (ax_v, ax_s), (ax_t, ax_d) = fig.subplots(2, 2)
     colors = [f"C{i % 10}" for i in range(len(runs))]
@@ -151,6 +169,7 @@ def plot_compare(runs: Sequence[RunFolder], labels: Sequence[str], path: Path) -
     ax_v.grid(alpha=0.3)
     ax_v.legend(loc="best", fontsize=8)
     ax_s.set_title("step durations", fontsize=9)
+    ax_s.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax_s.set_xlabel("step index")
     ax_s.set_ylabel("duration [s]")
     ax_s.grid(alpha=0.3)
@@ -177,9 +196,9 @@ def plot_compare(runs: Sequence[RunFolder], labels: Sequence[str], path: Path) -
     ax_t.set_title("MPC solve time per solve (whiskers: 1-99 %)", fontsize=9)
     ax_t.set_ylabel("solve time [ms]")
     ax_t.grid(alpha=0.3, axis="y", which="both")
-    dist = [float(run.summary.get("distance_m") or 0.0) for run in runs]
+    speed = [_mean_speed_mps(run) for run in runs]
     x = np.arange(len(runs))
-    bars = ax_d.bar(x, dist, color=colors, alpha=0.8)
+    bars = ax_d.bar(x, speed, color=colors, alpha=0.8)
     for bar, run in zip(bars, runs, strict=True):
         if run.summary.get("fell"):
             bar.set_hatch("xx")
@@ -191,11 +210,32 @@ def plot_compare(runs: Sequence[RunFolder], labels: Sequence[str], path: Path) -
                 va="bottom",
                 fontsize=8,
             )
+    for bar, run in zip(bars, runs, strict=True):
+        bar_label = f"{float(run.summary.get('distance_m') or 0.0):.2f} m / "
+        bar_label += f"{float(run.summary.get('duration_s') or 0.0):.1f} s"
+        ax_d.annotate(
+            bar_label,
+            (bar.get_x() + bar.get_width() / 2, 0.0),
+            xytext=(0, 3),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=7,
+        )
     ax_d.set_xticks(x, labels, fontsize=8)
-    ax_d.set_title("distance covered (hatched: fell)", fontsize=9)
-    ax_d.set_ylabel("distance [m]")
+    ax_d.set_title("mean speed = distance / duration (hatched: fell)", fontsize=9)
+    ax_d.set_ylabel("mean forward speed [m/s]")
     ax_d.grid(alpha=0.3, axis="y")
     return save_figure_atomic(fig, path)
+
+
+def _mean_speed_mps(run: RunFolder) -> float:
+    """Distance divided by the simulated duration [m/s] (0 for an empty run)."""
+    s = run.summary
+    duration = float(s.get("duration_s") or 0.0)
+    if s.get("mean_speed_mps") is not None:
+        return float(s["mean_speed_mps"])
+    return float(s.get("distance_m") or 0.0) / duration if duration > 0 else 0.0
 
 
 def compare_runs(run_dirs: Sequence[str | Path], out_dir: str | Path) -> dict[str, Path]:

@@ -6,13 +6,21 @@
   fall time marked.
 * ``course_top.png``: top view of the course (patches green = both feet, blue = left
   only, red = right only; obstacles grey) with the CoM path and every touchdown, coloured
-  by foot; touchdowns on a forbidden patch or a hole are marked with a black X (Fig. 7).
+  by foot, each labelled with its touchdown time [s]; touchdowns on a forbidden patch or a
+  hole are marked with a black X and their time in bold (Fig. 7). The same violation
+  times are marked on every time axis (red dotted lines, :func:`_mark_violations`), so a
+  violation seen on the map can be found on the time plots.
 * ``steps.png``: duration of each step, MPC sampling time over time and, for MPC
-  controllers, the solve time of every solve (Fig. 6d / Fig. 9).
+  controllers, the solve time of every solve (Fig. 6d / Fig. 9) against the real-time
+  budget: the MPC period, the median time between successive solves (a solve that takes
+  longer than that could not run in real time).
 * ``momentum.png`` (``kd`` only): measured spatial momentum l_G,x, k_G,y, k_G,z against the
   MPC's one-stage-ahead prediction (Fig. 8).
-* ``contact_torque.png``: contact normal forces, and the peak commanded joint torque
-  against the actuator limits (33.5 / 67 N m on both robots).
+* ``contact_torque.png``: the vertical (world z) component of the summed terrain contact
+  force on each foot (ground on foot, up positive: about m g / 2 per foot when standing;
+  it is not the force normal to a sloped or edge contact, and is negative only when the
+  terrain pushes a foot down, e.g. a foot caught under a stone's edge), and the peak
+  commanded joint torque against the actuator limits (33.5 / 67 N m on both robots).
 
 Figures are built with matplotlib's object-oriented API on the Agg canvas (no pyplot, no
 global backend switch) and written atomically.
@@ -97,6 +105,24 @@ def _mark_fall(ax: Any, run: RunFolder) -> None:
         )
 
 
+def violation_times_s(run: RunFolder) -> list[float]:
+    """Times [s] of the touchdowns on a forbidden patch or a hole (``summary.json``)."""
+    holds = run.summary.get("footholds") or []
+    return [float(h["t_s"]) for h in holds if not h.get("allowed", True) and "t_s" in h]
+
+
+def _mark_violations(ax: Any, run: RunFolder, label: bool = False) -> None:
+    """A red dotted vertical line at every foothold violation on a time axis."""
+    for i, t in enumerate(violation_times_s(run)):
+        ax.axvline(
+            t,
+            color="tab:red",
+            ls=":",
+            lw=1.2,
+            label="foothold violation" if label and i == 0 else None,
+        )
+
+
 def _note(ax: Any, text: str) -> None:
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.35")
 
@@ -116,6 +142,7 @@ def plot_velocity(run: RunFolder, path: Path) -> Path:
     if cmd is not None:
         ax.plot(t, cmd, color="black", lw=1.5, ls="-.", label="command")
     _mark_fall(ax, run)
+    _mark_violations(ax, run, label=True)
     rmse = run.summary.get("speed_rmse_mps")
     extra = f" (speed RMSE {rmse:.3f} m/s after 1 s)" if isinstance(rmse, float) else ""
     ax.set_title(run_title(run) + extra, fontsize=9)
@@ -187,6 +214,22 @@ def plot_course_top(run: RunFolder, path: Path) -> Path:
         )
     bad = np.array([h["pos_m"][:2] for h in holds if not h["allowed"]]).reshape(-1, 2)
     ax.scatter(bad[:, 0], bad[:, 1], marker="x", s=140, color="black", linewidths=2.5, zorder=4)
+    for h in holds:  # touchdown times, to find a touchdown on the time plots
+        if "t_s" not in h:
+            continue
+        side = 1.0 if h["foot"] == "left" else -1.0
+        ax.annotate(
+            f"{float(h['t_s']):.2f}",
+            (h["pos_m"][0], h["pos_m"][1]),
+            xytext=(0, 9 * side),
+            textcoords="offset points",
+            ha="center",
+            va="bottom" if side > 0 else "top",
+            fontsize=6 if h["allowed"] else 7.5,
+            fontweight="normal" if h["allowed"] else "bold",
+            color=FOOT_COLORS.get(h["foot"], "black") if h["allowed"] else "black",
+            zorder=5,
+        )
     ax.update_datalim([(x_lo, y_mid - half_y), (x_hi, y_mid + half_y)])
     ax.margins(0.0)
     ax.autoscale_view()
@@ -194,7 +237,12 @@ def plot_course_top(run: RunFolder, path: Path) -> Path:
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     n_bad = len(bad)
-    ax.set_title(f"{run_title(run)}\n{len(holds)} touchdowns, {n_bad} violations", fontsize=9)
+    when = ", ".join(f"{t:.2f}" for t in violation_times_s(run)[:8])
+    at = f" (t = {when}{', ...' if n_bad > 8 else ''} s)" if n_bad else ""
+    ax.set_title(
+        f"{run_title(run)}\n{len(holds)} touchdowns (labels: time [s]), {n_bad} violations{at}",
+        fontsize=9,
+    )
     handles = [
         LegendPatch(facecolor=PATCH_COLORS["both"], alpha=0.45, label="patch: both feet"),
         LegendPatch(facecolor=PATCH_COLORS["left"], alpha=0.45, label="patch: left only"),
@@ -203,7 +251,7 @@ def plot_course_top(run: RunFolder, path: Path) -> Path:
         Line2D([], [], color="black", lw=1.0, label="CoM path"),
         Line2D([], [], ls="", marker="^", color=FOOT_COLORS["left"], label="left touchdown"),
         Line2D([], [], ls="", marker="v", color=FOOT_COLORS["right"], label="right touchdown"),
-        Line2D([], [], ls="", marker="x", color="black", mew=2.5, label="violation"),
+        Line2D([], [], ls="", marker="x", color="black", mew=2.5, label="violation (time bold)"),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8)
     return save_figure_atomic(fig, path)
@@ -211,7 +259,9 @@ def plot_course_top(run: RunFolder, path: Path) -> Path:
 
 def plot_steps(run: RunFolder, path: Path) -> Path:
     """Step durations, MPC sampling time over time with pushes shaded, and solve times
-    (Fig. 6d / Fig. 9)."""
+    against the real-time budget (Fig. 6d / Fig. 9)."""
+    from matplotlib.ticker import MaxNLocator
+
     mpc = run.mpc_log
     n_rows = 3 if mpc is not None else 2
     fig = new_figure(9.0, 2.4 * n_rows + 0.6)
@@ -223,6 +273,7 @@ def plot_steps(run: RunFolder, path: Path) -> Path:
         ax.set_ylim(0.0, 1.15 * float(steps.max()))
     else:
         _note(ax, "no steps (the controller does not step)")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("step index")
     ax.set_ylabel("step duration [s]")
     ax.set_title(run_title(run), fontsize=9)
@@ -237,7 +288,8 @@ def plot_steps(run: RunFolder, path: Path) -> Path:
         _note(ax, "no MPC sampling time (no gait schedule)")
     _mark_pushes(ax, run)
     _mark_fall(ax, run)
-    if run.summary.get("pushes"):
+    _mark_violations(ax, run, label=True)
+    if run.summary.get("pushes") or violation_times_s(run):
         ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("MPC dt [s]")
@@ -258,15 +310,37 @@ def plot_steps(run: RunFolder, path: Path) -> Path:
                     color="black",
                     label="not converged",
                 )
+            budget_ms = mpc_period_ms(mpc["t_s"])
+            if budget_ms is not None:
+                over = int(np.sum(mpc["solve_ms"] > budget_ms))
+                ax.axhline(
+                    budget_ms,
+                    color="black",
+                    ls="--",
+                    lw=1.2,
+                    label=f"real-time budget: MPC period {budget_ms:.0f} ms "
+                    f"({over}/{mpc['t_s'].size} solves over)",
+                )
             ax.legend(loc="upper right", fontsize=8)
             ax.set_yscale("log")
         else:
             _note(ax, "no MPC solves")
         _mark_fall(ax, run)
+        _mark_violations(ax, run)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("solve time [ms]")
         ax.grid(alpha=0.3, which="both")
     return save_figure_atomic(fig, path)
+
+
+def mpc_period_ms(solve_t_s: np.ndarray) -> float | None:
+    """The MPC period [ms]: the median time between successive solves (the time a solve
+    may take in real time), or None with fewer than two solves."""
+    if solve_t_s.size < 2:
+        return None
+    gaps = np.diff(solve_t_s)
+    gaps = gaps[gaps > 0]
+    return float(np.median(gaps)) * 1e3 if gaps.size else None
 
 
 def has_momentum_prediction(run: RunFolder) -> bool:
@@ -304,6 +378,7 @@ def plot_momentum(run: RunFolder, path: Path) -> Path:
             label="MPC prediction (one stage ahead)",
         )
         _mark_fall(ax, run)
+        _mark_violations(ax, run)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     meas, pred = mpc["lGx_meas"], mpc["lGx_pred"]
@@ -316,7 +391,8 @@ def plot_momentum(run: RunFolder, path: Path) -> Path:
 
 
 def plot_contact_torque(run: RunFolder, path: Path) -> Path:
-    """Contact normal forces per foot, and peak commanded torque against the limits."""
+    """Vertical (world z) contact force on each foot, and the peak commanded torque
+    against the limits (see the module docstring for the sign convention)."""
     ratio = run.column("tau_limit_ratio_max")
     n_rows = 3 if ratio is not None else 2
     fig = new_figure(9.0, 2.4 * n_rows + 0.6)
@@ -325,9 +401,11 @@ def plot_contact_torque(run: RunFolder, path: Path) -> Path:
     ax = axes[0]
     for foot, color in (("left", "tab:blue"), ("right", "tab:red")):
         ax.plot(t, run.log[f"fz_{foot}_n"], color=color, lw=0.9, label=f"{foot} foot")
+    ax.axhline(0.0, color="0.4", lw=0.6)
     _mark_fall(ax, run)
-    ax.set_ylabel("normal force [N]")
-    ax.set_title(run_title(run), fontsize=9)
+    _mark_violations(ax, run, label=True)
+    ax.set_ylabel("vertical contact force\n(world z, up > 0) [N]")
+    ax.set_title(run_title(run) + "\nterrain force on each foot, world-z component", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     ax = axes[1]
@@ -335,6 +413,7 @@ def plot_contact_torque(run: RunFolder, path: Path) -> Path:
     limits = run.summary.get("torque_limits_nm") or DEFAULT_TORQUE_LIMITS_NM
     for lim, ls in zip(sorted(limits), ("--", ":", "-."), strict=False):
         ax.axhline(lim, color="black", ls=ls, lw=1.0, label=f"limit {lim:g} N m")
+    _mark_violations(ax, run)
     ax.set_ylabel("torque [N m]")
     ax.set_ylim(0.0, 1.1 * max(max(limits), float(np.nanmax(run.log["tau_abs_max_nm"]))))
     ax.grid(alpha=0.3)

@@ -135,7 +135,7 @@ COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
 
 
 def prepare_output_folder(
-    path: Path | None,
+    path: str | Path | None,
     *,
     option: str,
     default_prefix: str,
@@ -159,8 +159,9 @@ def prepare_output_folder(
     if path is None:
         stamp = time.strftime("%Y%m%d-%H%M%S")
         path = Path("runs") / f"{default_prefix}{stamp}-{uuid.uuid4().hex[:6]}"
-    elif str(path).strip() in ("", "."):
+    elif str(path).strip() in ("", "."):  # checked on the string: Path("") is "."
         raise ConfigError(option, str(path), "a folder path for the results (not empty, not '.')")
+    path = Path(path)
     if path.exists() and not path.is_dir():
         raise ConfigError(option, str(path), "a folder (this path is a file)")
     for parent in path.parents:

@@ -9,7 +9,18 @@ by :mod:`gaitnet_mpc.results.plots`):
 * ``events.csv``: touchdowns, lift-offs, slips, pivots and scuffs of the feet
   (:mod:`gaitnet_mpc.results.events`).
 * ``course.json``: the course in the JSON course format (for the top-view plot).
-* ``video.mp4``: offscreen rendering, unless disabled.
+* ``video.mp4``: offscreen rendering, unless disabled (:class:`VideoConfig`: an oblique
+  follow camera by default, ``camera="side"`` for the robot model's side view; a text
+  overlay of time, commanded vx and the current step's MPC dt).
+
+How the episode ended (``summary.json``): ``fell`` when the simulator's fall detector fired
+(CoM height below ``fall_com_height_ratio`` of its start height, trunk tilt above
+``fall_tilt_rad``, a non-foot body on the terrain, or divergence). A run that reaches its
+duration without a fall may still end badly, so ``ended_upright`` applies the same two
+measures at *half* the fall margins (:func:`ended_upright`): tilt at most
+``fall_tilt_rad / 2`` (0.5 rad) and CoM no more than half the way down to the fall
+height (at most 25 % below its start height). ``outcome`` is ``"interrupted"``,
+``"fell"``, ``"not_upright"`` or ``"ok"``, in that order of precedence.
 """
 
 from __future__ import annotations
@@ -30,14 +41,90 @@ from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.logs import H_COLS, EpisodeLog, TelemetryRecorder
 from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
 
+#: Video cameras: ``oblique`` (a higher follow camera, behind and to the side, that shows
+#: the feet on the terrain) and ``side`` (the robot model's ``track`` camera, level).
+CAMERAS = ("oblique", "side")
+
 
 @dataclass(frozen=True)
 class VideoConfig:
-    """Offscreen rendering settings (``MUJOCO_GL=egl`` works without a GPU)."""
+    """Offscreen rendering settings (``MUJOCO_GL=egl`` works without a GPU).
+
+    Attributes:
+        fps: frames per second of simulated time [1/s].
+        width_px, height_px: frame size [px].
+        camera: one of :data:`CAMERAS`.
+        overlay: draw time, commanded vx and the current step's MPC dt onto each frame.
+        oblique_distance_m: distance of the oblique camera from the trunk [m].
+        oblique_elevation_deg: its elevation (negative: looking down) [deg].
+        oblique_azimuth_deg: its azimuth about world z (90: from -y, the side) [deg].
+    """
 
     fps: int = 30
     width_px: int = 640
     height_px: int = 480
+    camera: str = "oblique"
+    overlay: bool = True
+    oblique_distance_m: float = 2.6
+    oblique_elevation_deg: float = -32.0
+    oblique_azimuth_deg: float = 125.0
+
+    def __post_init__(self) -> None:
+        if self.camera not in CAMERAS:
+            raise ConfigError("--camera", self.camera, f"one of {list(CAMERAS)}")
+        if not (self.fps > 0 and self.width_px >= 64 and self.height_px >= 64):
+            raise ConfigError(
+                "video", (self.fps, self.width_px, self.height_px), "fps > 0, frames >= 64 px"
+            )
+
+
+def _video_camera(sim: Simulator, video: VideoConfig) -> Any:
+    """The camera to render with: the model's ``track`` camera name (side) or a free
+    ``MjvCamera`` tracking the trunk from above and behind (oblique)."""
+    import mujoco
+
+    if video.camera == "side":
+        return "track"
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+    cam.trackbodyid = sim.model.body(sim.robot.spec.trunk_body).id
+    cam.distance = video.oblique_distance_m
+    cam.elevation = video.oblique_elevation_deg
+    cam.azimuth = video.oblique_azimuth_deg
+    return cam
+
+
+def overlay_text(frame: np.ndarray, lines: list[str]) -> np.ndarray:
+    """``frame`` (H, W, 3) uint8 with ``lines`` drawn top-left in white on a dark box
+    (Pillow, which matplotlib already depends on)."""
+    from PIL import Image, ImageDraw
+
+    img = Image.fromarray(frame)
+    draw = ImageDraw.Draw(img)
+    text = "\n".join(lines)
+    box = draw.multiline_textbbox((8, 6), text)
+    draw.rectangle((box[0] - 4, box[1] - 3, box[2] + 4, box[3] + 3), fill=(0, 0, 0))
+    draw.multiline_text((8, 6), text, fill=(255, 255, 255))
+    return np.asarray(img)
+
+
+def _overlay_lines(t_s: float, command: Command, step_dt_s: float) -> list[str]:
+    """The overlay's text: time, commanded vx and the current step's MPC dt."""
+    dt = f"{step_dt_s * 1e3:.0f} ms" if np.isfinite(step_dt_s) else "-"
+    return [f"t = {t_s:6.2f} s", f"cmd vx = {command.vx_mps:+.2f} m/s", f"step dt = {dt}"]
+
+
+def ended_upright(
+    final_tilt_rad: float, final_com_height_m: float, com_height0_m: float, sim_config: Any
+) -> bool:
+    """Whether the episode ended upright: the fall detector's tilt and CoM-height measures
+    at half its margins, ``tilt <= fall_tilt_rad / 2`` and
+    ``h >= h0 (1 + fall_com_height_ratio) / 2`` (see the module docstring)."""
+    tilt_ok = final_tilt_rad <= 0.5 * sim_config.fall_tilt_rad
+    height_ok = final_com_height_m >= 0.5 * (1.0 + sim_config.fall_com_height_ratio) * (
+        com_height0_m
+    )
+    return bool(tilt_ok and height_ok)
 
 
 #: Marker colours (RGBA) of planned footholds, as the course colours: left blue, right red.
@@ -117,11 +204,13 @@ def run_episode(
     state = sim.state()
     controller.reset(state)
     com0 = state.com_world_m.copy()
+    com_height0_m = sim.com_height_m
     log = EpisodeLog()
     probe = TelemetryRecorder(controller)
     events = EventRecorder()
     tau_limit = np.maximum(sim.model.actuator_ctrlrange[:, 1].copy(), 1e-9)
     renderer, writer, frame_dt, next_frame_t = None, None, np.inf, 0.0
+    overlay = False
     tmp_video = None
     if video is not None and out_dir is not None:
         import imageio.v2 as imageio
@@ -135,6 +224,8 @@ def run_episode(
         )
         frame_dt = 1.0 / video.fps
         foot_r = sim.robot.spec.foot_contact_radius_m
+        camera = _video_camera(sim, video)
+        overlay = video.overlay
     bar = _progress_bar(duration_s) if progress else None
     viewer_dt, next_view_t = 1.0 / 60.0, 0.0
     t_wall0 = time.perf_counter()
@@ -152,9 +243,13 @@ def run_episode(
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
                 assert writer is not None  # made together with the renderer
                 t_r = time.perf_counter()
-                renderer.update_scene(sim.data, camera="track")
+                renderer.update_scene(sim.data, camera=camera)
                 _draw_footholds(renderer.scene, controller.planned_footholds(), foot_r)
-                writer.append_data(renderer.render())
+                frame = renderer.render()
+                if overlay:
+                    lines = _overlay_lines(sim.time_s, command, probe.step_dt())
+                    frame = overlay_text(frame, lines)
+                writer.append_data(frame)
                 render_wall_s += time.perf_counter() - t_r
                 next_frame_t += frame_dt
             if viewer is not None and sim.time_s >= next_view_t - 1e-9:
@@ -183,6 +278,21 @@ def run_episode(
     final = sim.state()
     summary = _summarise(sim, controller, command, final, com0, log, wall_s, render_wall_s)
     summary["interrupted"] = interrupted
+    summary["com_height0_m"] = com_height0_m
+    summary["ended_upright"] = ended_upright(
+        summary["final_tilt_rad"], summary["final_com_height_m"], com_height0_m, sim.config
+    )
+    summary["outcome"] = (
+        "interrupted"
+        if interrupted
+        else "fell"
+        if summary["fell"]
+        else "ok"
+        if summary["ended_upright"]
+        else "not_upright"
+    )
+    if video is not None:
+        summary["video"] = {"camera": video.camera, "overlay": video.overlay, "fps": video.fps}
     if meta:
         summary = {**meta, **summary}
     if out_dir is not None:
