@@ -1,0 +1,107 @@
+"""Injected QP failures in a closed loop: the controller keeps its last good plan, its
+torques stay finite, and the failures are counted in its MPC statistics.
+
+The backend's ``_solve`` is replaced (for the backend class the controller's settings name)
+by one that, inside a window of simulated time, either reports a failed status or raises;
+:meth:`QPWorkspace.solve` turns the exception into a ``"numerical_error"`` status and
+:meth:`QPWorkspace.solve_or_raise` into a :class:`QPSolveError`, which the controller
+catches. Outside the window the real backend runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gaitnet_mpc.command import Command
+from gaitnet_mpc.control.registry import ControllerContext, controller_config, make_controller
+from gaitnet_mpc.mpc.qp import BACKENDS
+from gaitnet_mpc.mpc.qp.workspace import BackendResult
+from gaitnet_mpc.robots import RobotModel
+from gaitnet_mpc.sim.simulator import Simulator
+from gaitnet_mpc.terrain import load_course
+
+DURATION_S = 0.4
+FAIL_FROM_S = 0.1  # the failure window [s]: several replans (every 0.02 s) and a step start
+FAIL_UNTIL_S = 0.25
+VX_MPS = 0.5
+
+
+def _backend_name(controller: str, config: Any) -> str:
+    """The QP backend the controller's settings name."""
+    return config.sequential.kd.qp_backend if controller == "kd" else config.mpc.qp_backend
+
+
+@pytest.mark.parametrize("controller", ["kd", "srbm"])
+@pytest.mark.parametrize("mode", ["status", "raise"])
+def test_failed_qp_keeps_last_plan_and_is_counted(
+    controller: str,
+    mode: str,
+    robots: Callable[[str], RobotModel],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    robot = robots("humanoid3d")
+    course = load_course("flat")
+    command = Command(VX_MPS)
+    config = controller_config(controller, robot.spec.planar)
+    ctrl = make_controller(controller, ControllerContext(robot, course, command, {}, config))
+    backend = BACKENDS[_backend_name(controller, config)]
+    real_solve = backend._solve
+    window = {"on": False, "calls": 0}
+
+    def flaky_solve(self: Any, problem: Any, warm_start: Any) -> BackendResult:
+        if not window["on"]:
+            return real_solve(self, problem, warm_start)
+        window["calls"] += 1
+        if mode == "raise":
+            raise RuntimeError("injected backend crash")
+        return BackendResult(None, "infeasible", "injected failure")
+
+    monkeypatch.setattr(backend, "_solve", flaky_solve)
+    # what the controller acts on: kd's plan, srbm's stance wrench
+    kept = "plan" if controller == "kd" else "wrench"
+
+    sim = Simulator(robot, course)
+    ctrl.reset(sim.state())
+    stats = ctrl.mpc_stats
+    assert stats is not None
+    solves_before = last_good = None
+    n_ticks = round(DURATION_S / sim.config.timestep_s)
+    for _ in range(n_ticks):
+        state = sim.state()
+        if not window["on"] and FAIL_FROM_S <= state.t_s < FAIL_UNTIL_S:
+            window["on"] = True
+            solves_before = len(stats.converged)
+            last_good = getattr(ctrl, kept)
+            assert last_good is not None, "no good plan before the failures start"
+        elif window["on"] and state.t_s >= FAIL_UNTIL_S:
+            window["on"] = False
+            solves_in_window = len(stats.converged) - solves_before
+        tau = ctrl.compute(state)
+        assert np.all(np.isfinite(tau)), f"non-finite torque at t = {state.t_s:.3f} s"
+        if window["on"]:
+            assert getattr(ctrl, kept) is last_good, "the plan changed during a failed solve"
+        sim.step(tau)
+        assert not sim.fall.fell, sim.fall.reason
+
+    assert window["calls"] >= 3, "the failure window saw too few solves"
+    # every solve of the window failed and was recorded as such: not converged, one QP,
+    # no solve time (a solve that ran takes time)
+    assert solves_in_window >= 3
+    assert solves_before is not None
+    failed = slice(solves_before, solves_before + solves_in_window)
+    assert not any(stats.converged[failed])
+    assert all(n == 1 for n in stats.qps_per_solve[failed])
+    if controller == "kd":
+        assert all(t == 0.0 for t in stats.solve_time_s[failed])
+    summary = stats.summary()
+    assert summary["solves"] == len(stats.converged)
+    converged_fraction = summary["converged_fraction"]
+    assert isinstance(converged_fraction, float)
+    assert converged_fraction <= 1.0 - solves_in_window / len(stats.converged) + 1e-12
+    # and the controller recovered: solves after the window succeed and replace the plan
+    assert any(stats.converged[solves_before + solves_in_window :])
+    assert getattr(ctrl, kept) is not last_good
