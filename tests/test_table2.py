@@ -1,0 +1,123 @@
+"""Table II pieces: problem recording round trip, CD-SQP, AD(3), variable counts."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitnet_mpc.table2.ad3 import AD3
+from gaitnet_mpc.table2.cd_problem import (
+    CDProblem,
+    CDSolution,
+    cd_cost,
+    cd_violation,
+    centroidal_problem,
+    rollout,
+)
+from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
+from gaitnet_mpc.table2.problems import (
+    Recording,
+    RecordingSpec,
+    kd_solver,
+    load_problems,
+    record_run,
+    save_problems,
+)
+from gaitnet_mpc.table2.run import PAPER_TABLE2, variable_counts
+
+#: A plan satisfies the CD constraints to this (dynamics in state units, positions in m).
+FEASIBLE = 1e-6
+
+
+@pytest.fixture(scope="module")
+def recording() -> Recording:
+    """A short closed-loop kd walk on flat ground (a full solve at the step start and the
+    replans after it)."""
+    return record_run(RecordingSpec(course="flat", duration_s=0.6, skip_s=0.2))
+
+
+@pytest.fixture(scope="module")
+def saved(recording: Recording, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("table2") / "problems.npz"
+    return save_problems(path, recording.problems, ["flat"] * len(recording.problems))
+
+
+@pytest.fixture(scope="module")
+def cd_problem(saved: Path) -> CDProblem:
+    return centroidal_problem(kd_solver(), load_problems(saved, 1)[0].problem)
+
+
+def test_recording_round_trip_gives_the_same_plan(recording: Recording, saved: Path) -> None:
+    loaded = load_problems(saved)
+    assert len(loaded) == len(recording.problems) >= 3
+    assert any(r.problem.choose_dt for r in loaded)  # a step start is among them
+    solver = kd_solver()
+    for rec, original in zip(loaded, recording.results, strict=True):
+        assert rec.course == "flat"
+        again = solver.solve(rec.problem)
+        assert again.n_qps == original.n_qps
+        for name in ("f", "tau", "p_foot", "p_com"):
+            np.testing.assert_allclose(
+                getattr(again.iterate, name), getattr(original.iterate, name), rtol=0, atol=1e-8
+            )
+        np.testing.assert_allclose(again.dts_s, original.dts_s, rtol=0, atol=1e-12)
+
+
+def test_load_rejects_a_foreign_file(tmp_path: Path) -> None:
+    from gaitnet_mpc.errors import ConfigError
+
+    path = tmp_path / "other.npz"
+    np.savez(path, x=np.zeros(3))
+    with pytest.raises(ConfigError, match="problems file"):
+        load_problems(path)
+
+
+def test_proposed_plan_is_feasible_for_the_cd_problem(saved: Path, cd_problem: CDProblem) -> None:
+    """The CD problem holds the proposed method's constraints: its plan meets them."""
+    res = kd_solver().solve(load_problems(saved, 1)[0].problem)
+    it = res.iterate
+    plan = CDSolution(rollout(cd_problem, it.f, it.tau, it.p_foot), it.f, it.tau, it.p_foot)
+    assert max(cd_violation(cd_problem, plan).values()) < FEASIBLE
+
+
+def test_cd_sqp_converges_to_a_feasible_plan(cd_problem: CDProblem) -> None:
+    sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
+    res = sqp.solve(cd_problem)
+    assert res.converged, res.status
+    assert 1 <= res.n_qps < 50
+    assert max(cd_violation(cd_problem, res.solution).values()) < FEASIBLE
+    guess = cd_problem.guess
+    start = CDSolution(cd_problem.guess_states(), guess.f, guess.tau, guess.p_foot)
+    assert max(cd_violation(cd_problem, start).values()) > 1.0  # it had work to do
+    assert res.cost == pytest.approx(cd_cost(cd_problem, res.solution))
+
+
+def test_ad3_converges_near_the_proposed_cost(saved: Path) -> None:
+    """AD(3) converges (within its 50 rounds) on one of the first recorded problems
+    (it converges on about 20 % of them: its rate is linear), to a feasible plan whose
+    eq. 18 cost is within [0.8, 1.05] of the proposed plan's (scored on the same CD
+    problem) and within 1 % of CD-SQP's."""
+    kd = kd_solver()
+    for rec in load_problems(saved, 8):
+        cd = centroidal_problem(kd, rec.problem)
+        res = AD3().solve(cd)
+        assert res.n_qps % 3 == 0
+        assert max(cd_violation(cd, res.solution).values()) < FEASIBLE
+        if res.converged:
+            break
+    assert res.converged
+    it = kd.solve(rec.problem).iterate
+    plan = CDSolution(rollout(cd, it.f, it.tau, it.p_foot), it.f, it.tau, it.p_foot)
+    assert 0.8 <= res.cost / cd_cost(cd, plan) <= 1.05
+    sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),))).solve(cd)
+    assert res.cost == pytest.approx(sqp.cost, rel=1e-2)
+
+
+def test_variable_counts_for_h10() -> None:
+    counts = variable_counts(10)
+    assert counts["CD-SQP"] == [300]  # 30 h (paper 34 h - 22 = 318)
+    assert counts["AD(3)"] == [240, 120, 180]  # 24 h, 12 h, 18 h (paper 255, 201, 156)
+    assert counts["proposed (implicit KD)"] == [345]  # 33 h + 15 (paper 33 h - 21 = 309)
+    assert PAPER_TABLE2["CD-SQP"][1] == 1.0
