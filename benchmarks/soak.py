@@ -33,18 +33,19 @@ import argparse
 import json
 import math
 import os
-import signal
 import sys
 import time
 import traceback
 import warnings
 from collections.abc import Callable, Generator, Sequence
+from contextlib import closing
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, sigterm_as_keyboard_interrupt
 from machine import machine_info
 
 RESULTS = Path(__file__).parent / "results"
@@ -270,23 +271,18 @@ def simulate(spec: EpisodeSpec, built: _Built | None = None) -> dict[str, Any]:
     return run_episode(built.sim, built.controller, built.command, spec.duration_s, progress=False)
 
 
-def _solve_counts(controller_name: str, controller: Any) -> dict[str, int]:
-    """Solves, unconverged solves and QP failures the controller handled.
-
-    ``MPCStats`` has no failure field (see the report); the controllers record a failure
-    as: kd / gaitnet ``record(0.0, 1, False, full)`` (zero solve time: a sequential solve
-    that ran always takes time), srbm ``converged=False`` (its successes are always
-    ``True``), wbmpc ``converged = solution.success`` (the iterate is used anyway).
-    """
+def _solve_counts(controller: Any) -> dict[str, int]:
+    """Solves, unconverged solves and failed solves (QP / NLP failures the controller
+    handled) from the controller's :class:`~gaitnet_mpc.control.base.MPCStats`."""
     stats = None if controller is None else controller.mpc_stats
     if stats is None:
         return {"solves": 0, "unconverged": 0, "qp_failures": 0}
-    bad = [not c for c in stats.converged]
-    if controller_name in ("kd", "gaitnet"):
-        failed = sum(b and t == 0.0 for b, t in zip(bad, stats.solve_time_s, strict=True))
-    else:
-        failed = sum(bad)
-    return {"solves": len(bad), "unconverged": sum(bad), "qp_failures": int(failed)}
+    summary = stats.summary()
+    return {
+        "solves": int(summary["solves"] or 0),
+        "unconverged": sum(not c for c in stats.converged),
+        "qp_failures": int(summary["failed_solves"] or 0),
+    }
 
 
 def _mujoco_warnings(sim: Any) -> dict[str, int]:
@@ -330,7 +326,7 @@ def run_spec(spec_dict: dict[str, Any]) -> dict[str, Any]:
         "fall_reason": None,
         "mujoco_warnings": {} if sim is None else _mujoco_warnings(sim),
         "python_warnings": sorted({f"{w.category.__name__}: {w.message}" for w in caught})[:5],
-        **_solve_counts(spec.controller, built.controller),
+        **_solve_counts(built.controller),
     }
     if sim is not None:
         record["diverged"] = bool(sim.diverged) or not bool(np.all(np.isfinite(sim.data.qpos)))
@@ -355,11 +351,6 @@ def run_spec(spec_dict: dict[str, Any]) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------------------- runners
-def _ignore_sigint() -> None:
-    # The parent handles Ctrl-C / SIGTERM and stops the pool; workers just exit with it.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def _worker_died(spec: EpisodeSpec, exc: BaseException) -> dict[str, Any]:
     """The record of an episode whose worker process died (segfault, OOM kill)."""
     return {
@@ -385,78 +376,28 @@ def _worker_died(spec: EpisodeSpec, exc: BaseException) -> dict[str, Any]:
     }
 
 
-def _run_processes(specs: list[EpisodeSpec], workers: int) -> Generator[dict[str, Any], None, None]:
-    """Records of ``specs`` from a spawn process pool with at most ``workers`` episodes in
-    flight (so a dead worker is blamed on at most ``workers`` episodes, and the pool is
-    started again for the rest)."""
-    import multiprocessing as mp
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
-
-    ctx = mp.get_context("spawn")  # no MuJoCo/CasADi state shared through fork
-    todo = list(reversed(specs))
-    while todo:
-        pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)
-        broken = False
-        try:
-            pending: dict[Any, EpisodeSpec] = {}
-            while (todo or pending) and not broken:
-                while todo and len(pending) < workers:
-                    spec = todo.pop()
-                    pending[pool.submit(run_spec, spec.to_dict())] = spec
-                finished, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    spec = pending.pop(future)
-                    try:
-                        yield future.result()
-                    except BrokenProcessPool as exc:
-                        broken = True
-                        yield _worker_died(spec, exc)
-            for spec in pending.values():  # still in flight when the pool broke
-                yield _worker_died(spec, BrokenProcessPool("pool broken by another episode"))
-        finally:
-            for process in list(getattr(pool, "_processes", {}).values()):
-                process.terminate()  # an episode in progress is lost (the next run redoes it)
-            pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _run_ray(
-    specs: list[EpisodeSpec], workers: int, address: str | None
+def _records(
+    outcomes: Generator[Outcome[dict[str, Any], dict[str, Any]], None, None],
 ) -> Generator[dict[str, Any], None, None]:
-    """Records of ``specs`` as Ray tasks (local instance of ``workers`` CPUs, or the
-    cluster at ``address``), as ``gaitnet-mpc collect --backend ray`` runs its sets."""
-    from gaitnet_mpc.errors import ConfigError
+    """The episodes' records: :func:`run_spec`'s, or :func:`_worker_died`'s for an episode
+    whose worker died (any other error, e.g. a spec that cannot be sent, stops the soak).
+    Closing this generator closes ``outcomes`` (which stops the workers)."""
+    with closing(outcomes):
+        for outcome in outcomes:
+            if outcome.worker_died and outcome.error is not None:
+                yield _worker_died(EpisodeSpec.from_dict(outcome.item), outcome.error)
+            else:
+                yield outcome.get()
 
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError(
-            "--backend", "ray", "Ray installed (pip install 'gaitnet-mpc[ray]')"
-        ) from None
-    started = not ray.is_initialized()
-    if started:
-        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
-        if address is None:
-            kwargs["num_cpus"] = workers
-        ray.init(address=address, **kwargs)
-    try:
-        task = ray.remote(num_cpus=1, max_retries=0)(run_spec)
-        pending = {task.remote(spec.to_dict()): spec for spec in specs}
-        try:
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1, timeout=0.5)
-                for ref in ready:
-                    spec = pending.pop(ref)
-                    try:
-                        yield ray.get(ref)
-                    except ray.exceptions.RayError as exc:  # the worker died
-                        yield _worker_died(spec, exc)
-        finally:
-            for ref in pending:
-                ray.cancel(ref, force=True)
-    finally:
-        if started:
-            ray.shutdown()
+
+def _runs(options: SoakOptions, specs: list[EpisodeSpec]) -> Generator[dict[str, Any], None, None]:
+    """Records of ``specs`` from a spawn process pool or Ray tasks (as ``gaitnet-mpc
+    collect`` runs its sets), at most ``options.workers`` episodes in flight (so a dead
+    worker is blamed on at most that many episodes, and the pool is started again)."""
+    items = [spec.to_dict() for spec in specs]
+    if options.backend == "ray":
+        return _records(run_ray(run_spec, items, options.workers, options.address, max_retries=0))
+    return _records(run_processes(run_spec, items, options.workers))
 
 
 # ----------------------------------------------------------------------------- storage
@@ -677,24 +618,19 @@ def soak(
         f"{len(todo)} of {options.episodes} episodes to run ({len(records)} already in {path}), "
         f"{options.workers} worker(s), backend {options.backend}"
     )
-    runs = (
-        _run_ray(todo, options.workers, options.address)
-        if options.backend == "ray"
-        else _run_processes(todo, options.workers)
-    )
+    runs = _runs(options, todo)
     t0 = time.perf_counter()
     interrupted = False
-    previous = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
     try:
-        for n, record in enumerate(runs, 1):
-            _append(path, record)
-            records[record["index"]] = record
-            log(_episode_line(record, n, len(todo)))
+        with sigterm_as_keyboard_interrupt():
+            for n, record in enumerate(runs, 1):
+                _append(path, record)
+                records[record["index"]] = record
+                log(_episode_line(record, n, len(todo)))
     except KeyboardInterrupt:
         interrupted = True
         log(f"interrupted: {len(records)} of {options.episodes} episodes are in {path}")
     finally:
-        signal.signal(signal.SIGTERM, previous)
         runs.close()  # stops the workers now, not when the generator is collected
     report = make_report(
         records, settings, options.episodes, command_line, time.perf_counter() - t0, interrupted
@@ -717,10 +653,6 @@ def _episode_line(r: dict[str, Any], n: int, total: int) -> str:
     extra = f", {r['qp_failures']} QP failure(s)" if r["qp_failures"] else ""
     wall = "?" if r["wall_s"] is None else f"{r['wall_s']:.1f}"
     return f"[{n}/{total}] #{spec.index} {spec.label()}: {outcome}{extra}, {wall} s wall"
-
-
-def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt
 
 
 def replay(settings: DrawSettings, index: int) -> int:

@@ -1,5 +1,6 @@
 """Injected QP failures in a closed loop: the controller keeps its last good plan, its
-torques stay finite, and the failures are counted in its MPC statistics.
+torques stay finite, and the failures are counted in its MPC statistics (as failed solves,
+apart from solves that merely did not converge).
 
 The backend's ``_solve`` is replaced (for the backend class the controller's settings name)
 by one that, inside a window of simulated time, either reports a failed status or raises;
@@ -17,7 +18,9 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.command import Command
+from gaitnet_mpc.control.base import MPCStats
 from gaitnet_mpc.control.registry import ControllerContext, controller_config, make_controller
+from gaitnet_mpc.errors import QPSolveError
 from gaitnet_mpc.mpc.qp import BACKENDS
 from gaitnet_mpc.mpc.qp.workspace import BackendResult
 from gaitnet_mpc.robots import RobotModel
@@ -61,6 +64,19 @@ def test_failed_qp_keeps_last_plan_and_is_counted(
         return BackendResult(None, "infeasible", "injected failure")
 
     monkeypatch.setattr(backend, "_solve", flaky_solve)
+    # the MPC solves the injected failures made fail (a solve may call the backend more
+    # than once, e.g. kd's dt search; each failed MPC solve raises QPSolveError once)
+    real_mpc_solve = ctrl.mpc.solve
+    raised = {"n": 0}
+
+    def counting_mpc_solve(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return real_mpc_solve(*args, **kwargs)
+        except QPSolveError:
+            raised["n"] += 1
+            raise
+
+    monkeypatch.setattr(ctrl.mpc, "solve", counting_mpc_solve)
     # what the controller acts on: kd's plan, srbm's stance wrench
     kept = "plan" if controller == "kd" else "wrench"
 
@@ -88,20 +104,39 @@ def test_failed_qp_keeps_last_plan_and_is_counted(
         assert not sim.fall.fell, sim.fall.reason
 
     assert window["calls"] >= 3, "the failure window saw too few solves"
-    # every solve of the window failed and was recorded as such: not converged, one QP,
-    # no solve time (a solve that ran takes time)
+    # every solve of the window failed and was recorded as such: failed, not converged,
+    # one QP, its real (non-zero) solve time, and the same full / replan flag as a success
     assert solves_in_window >= 3
     assert solves_before is not None
     failed = slice(solves_before, solves_before + solves_in_window)
+    assert all(stats.failed[failed])
     assert not any(stats.converged[failed])
     assert all(n == 1 for n in stats.qps_per_solve[failed])
-    if controller == "kd":
-        assert all(t == 0.0 for t in stats.solve_time_s[failed])
+    assert all(t > 0.0 for t in stats.solve_time_s[failed])
+    if controller == "srbm":
+        assert all(stats.full_solve)  # srbm solves fully every time, failed or not
     summary = stats.summary()
     assert summary["solves"] == len(stats.converged)
+    # failed solves are exactly the injected failures (none outside the window)
+    assert raised["n"] == solves_in_window
+    assert summary["failed_solves"] == raised["n"]
+    assert raised["n"] <= window["calls"]
     converged_fraction = summary["converged_fraction"]
     assert isinstance(converged_fraction, float)
     assert converged_fraction <= 1.0 - solves_in_window / len(stats.converged) + 1e-12
     # and the controller recovered: solves after the window succeed and replace the plan
     assert any(stats.converged[solves_before + solves_in_window :])
     assert getattr(ctrl, kept) is not last_good
+
+
+def test_mpc_stats_counts_failed_apart_from_unconverged() -> None:
+    stats = MPCStats()
+    assert stats.summary()["failed_solves"] == 0
+    stats.record(0.004, 3, True, True)
+    stats.record(0.006, 8, False, False)  # hit its iteration cap: a plan, not converged
+    stats.record(0.002, 1, False, True, failed=True)
+    summary = stats.summary()
+    assert summary["solves"] == 3
+    assert summary["failed_solves"] == 1
+    assert summary["converged_fraction"] == pytest.approx(1 / 3)
+    assert stats.failed == [False, False, True]

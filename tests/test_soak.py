@@ -113,3 +113,19 @@ def test_nonfinite_torque_is_counted_apart(
     assert record["exception"]["type"] == "ConfigError"
     total = _table_rows(soak.make_report({0: record}, settings, 1, "test", 0.0, False))[-1]
     assert total[2:5] == ["1", "0", "1"]  # episodes, exceptions (others), non-finite torques
+
+
+def test_solve_counts_read_the_failed_solves_of_the_mpc_stats(soak: ModuleType) -> None:
+    from types import SimpleNamespace
+
+    from gaitnet_mpc.control.base import MPCStats
+
+    stats = MPCStats()
+    stats.record(0.004, 3, True, True)
+    stats.record(0.0, 5, False, False)  # unconverged, but a plan (and no solve time)
+    stats.record(0.002, 1, False, True, failed=True)
+
+    counts = soak._solve_counts(SimpleNamespace(mpc_stats=stats))
+
+    assert counts == {"solves": 3, "unconverged": 2, "qp_failures": 1}
+    assert soak._solve_counts(None) == {"solves": 0, "unconverged": 0, "qp_failures": 0}

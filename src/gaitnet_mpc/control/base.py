@@ -13,18 +13,36 @@ from gaitnet_mpc.state import RobotState
 
 @dataclass
 class MPCStats:
-    """Per-solve records of an MPC controller (one entry per solve)."""
+    """Per-solve records of an MPC controller (one entry per solve).
+
+    A *failed* solve found no usable solution (the QP backend raised
+    :class:`~gaitnet_mpc.errors.QPSolveError`, or the NLP solver reported failure); it is
+    also unconverged. An unconverged solve that did not fail (e.g. a sequential solve
+    stopped at its iteration cap) still produced a plan.
+
+    Attributes:
+        solve_time_s: wall time of each solve, failed ones included [s].
+        qps_per_solve: QPs (or NLP iterations) of each solve.
+        converged: whether each solve converged.
+        full_solve: whether each solve was a full one (at a step start) or a replan.
+        failed: whether each solve failed.
+    """
 
     solve_time_s: list[float] = field(default_factory=list)
     qps_per_solve: list[int] = field(default_factory=list)
     converged: list[bool] = field(default_factory=list)
     full_solve: list[bool] = field(default_factory=list)
+    failed: list[bool] = field(default_factory=list)
 
-    def record(self, solve_time_s: float, n_qps: int, converged: bool, full: bool) -> None:
+    def record(
+        self, solve_time_s: float, n_qps: int, converged: bool, full: bool, failed: bool = False
+    ) -> None:
+        """Append one solve's record (``failed``: no usable solution was found)."""
         self.solve_time_s.append(solve_time_s)
         self.qps_per_solve.append(n_qps)
         self.converged.append(converged)
         self.full_solve.append(full)
+        self.failed.append(failed)
 
     def summary(self) -> dict[str, float | int | None]:
         """The ``mpc`` block of ``summary.json``."""
@@ -34,6 +52,7 @@ class MPCStats:
                 "solve_ms_median": None,
                 "solve_ms_p99": None,
                 "qps_per_solve_mean": None,
+                "failed_solves": 0,
             }
         ms = 1e3 * np.asarray(self.solve_time_s)
         qps = np.asarray(self.qps_per_solve, dtype=float)
@@ -44,6 +63,7 @@ class MPCStats:
             "solve_ms_p99": float(np.percentile(ms, 99)),
             "qps_per_solve_mean": float(np.mean(qps)),
             "converged_fraction": float(np.mean(self.converged)),
+            "failed_solves": int(sum(self.failed)),
         }
         for name, mask in (("full", full), ("replan", ~full)):
             if np.any(mask):

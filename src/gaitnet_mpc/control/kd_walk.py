@@ -12,6 +12,7 @@ along the course come instead from a multi-step LIP footstep plan, re-made at ev
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -365,10 +366,11 @@ class KDWalkController(WalkingBase):
             step_index=sched.step_index,
             state=StepState(state, stance, swing) if full else None,
         )
+        t0_s = time.perf_counter()
         try:
             result = self.mpc.solve(problem)
         except QPSolveError:
-            self._stats.record(0.0, 1, False, full)
+            self._stats.record(time.perf_counter() - t0_s, 1, False, full, failed=True)
             return  # keep the last good plan
         result.t_plan_s = state.t_s
         self._stats.record(result.solve_time_s, result.n_qps, result.converged, full)

@@ -184,7 +184,7 @@ class SRBMWalkController(WalkingController):
         try:
             plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw, limits)
         except QPSolveError:
-            self._stats.record(time.perf_counter() - t0, 1, False, False)
+            self._stats.record(time.perf_counter() - t0, 1, False, True, failed=True)
             return  # keep the last good wrench
         self._stats.record(time.perf_counter() - t0, 1, True, True)
         self.wrench = plan.wrenches[0]

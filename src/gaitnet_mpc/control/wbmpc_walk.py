@@ -386,7 +386,11 @@ class WBWalkController(WalkingBase):
         problem = self._problem(state, phase_stage)
         warm = None if self.plan is None else self.mpc.shift(self.plan)
         sol = self.mpc.solve(problem, warm)
-        self._stats.record(sol.solve_time_s, sol.iterations, sol.success, full)
+        # An unsuccessful NLP solve is counted as failed, but its iterate is still the plan
+        # (wbmpc keeps no last good plan to fall back on).
+        self._stats.record(
+            sol.solve_time_s, sol.iterations, sol.success, full, failed=not sol.success
+        )
         self.plan = sol
         self.t_plan_s = state.t_s
         self.stage0_s = float(problem.dt_stage_s[0])

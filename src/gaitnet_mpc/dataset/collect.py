@@ -1,7 +1,8 @@
 """``gaitnet-mpc collect``: walk the protocol's sets in parallel and keep the folder whole.
 
 The sets run in a local process pool (``backend="process"``) or as Ray tasks
-(``backend="ray"``, on a local Ray instance or the cluster at ``address``). Workers only
+(``backend="ray"``, on a local Ray instance or the cluster at ``address``), through
+:mod:`gaitnet_mpc.parallel`. Workers only
 simulate and return a set's bytes; this process, which holds the folder's lock, writes
 each set file atomically and the manifest after every set. So:
 
@@ -17,11 +18,11 @@ from __future__ import annotations
 import json
 import os
 import platform
-import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator
+from contextlib import closing
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -44,6 +45,7 @@ from gaitnet_mpc.dataset.store import (
 )
 from gaitnet_mpc.dataset.teachers import teacher_config
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, sigterm_as_keyboard_interrupt
 from gaitnet_mpc.results.io import write_bytes_atomic, write_json_atomic
 
 BACKENDS = ("process", "ray")
@@ -75,7 +77,10 @@ class CollectOptions:
 
 
 # ----------------------------------------------------------------------------- workers
-def _walk_set(spec: SetSpec, queue: Any = None) -> tuple[bytes, dict[str, object], float]:
+SetBytes = tuple[bytes, dict[str, object], float]
+
+
+def _walk_set(spec: SetSpec, queue: Any = None) -> SetBytes:
     """Worker body: walk ``spec``; return the set file's bytes, its stats and wall time."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -85,69 +90,14 @@ def _walk_set(spec: SetSpec, queue: Any = None) -> tuple[bytes, dict[str, object
     return encode_set(spec, result.rows, stats), stats, result.wall_s
 
 
-def _init_process_worker() -> None:
-    # The parent handles Ctrl-C / SIGTERM and stops the pool; workers just exit with it.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-Done = tuple[SetSpec, bytes, dict[str, object], float]
-
-
-def _run_processes(
-    specs: list[SetSpec], workers: int, on_progress: Callable[[int, float], None]
-) -> Iterator[Done]:
-    import multiprocessing as mp
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
-    ctx = mp.get_context("spawn")  # no MuJoCo/CasADi state shared through fork
-    with ctx.Manager() as manager:
-        queue = manager.Queue()
-        pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process_worker)
-        try:
-            pending = {pool.submit(_walk_set, spec, queue): spec for spec in specs}
-            while pending:
-                finished, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-                while not queue.empty():
-                    on_progress(*queue.get())
-                for future in finished:
-                    spec = pending.pop(future)
-                    data, stats, wall_s = future.result()
-                    yield spec, data, stats, wall_s
-        finally:
-            for process in list(getattr(pool, "_processes", {}).values()):
-                process.terminate()  # a set in progress is lost (the next run redoes it)
-            pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _run_ray(specs: list[SetSpec], options: CollectOptions) -> Iterator[Done]:
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError(
-            "--backend", "ray", "Ray installed (pip install 'gaitnet-mpc[ray]')"
-        ) from None
-    started = not ray.is_initialized()
-    if started:
-        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
-        if options.address is None:
-            kwargs["num_cpus"] = options.workers
-        ray.init(address=options.address, **kwargs)
-    try:
-        task = ray.remote(num_cpus=1)(_walk_set)
-        pending = {task.remote(spec): spec for spec in specs}
-        try:
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1, timeout=0.5)
-                for ref in ready:
-                    spec = pending.pop(ref)
-                    data, stats, wall_s = ray.get(ref)
-                    yield spec, data, stats, wall_s
-        finally:
-            for ref in pending:
-                ray.cancel(ref, force=True)
-    finally:
-        if started:
-            ray.shutdown()
+def _runs(
+    specs: list[SetSpec], options: CollectOptions, on_progress: Callable[[int, float], None] | None
+) -> Generator[Outcome[SetSpec, SetBytes], None, None]:
+    """The sets' outcomes, in the order they finish, from the backend ``options`` names."""
+    if options.backend == "ray":
+        return run_ray(_walk_set, specs, options.workers, options.address)
+    report = None if on_progress is None else (lambda message: on_progress(*message))
+    return run_processes(_walk_set, specs, options.workers, report)
 
 
 # ----------------------------------------------------------------------------- manifest
@@ -319,22 +269,20 @@ def collect(
             if bar is not None:
                 bar.update(sim_s)
 
-        runs = (
-            _run_ray(todo, options)
-            if options.backend == "ray"
-            else _run_processes(todo, options.workers, on_progress)
-        )
-        previous = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+        runs = _runs(todo, options, on_progress if bar is not None else None)
         try:
-            for spec, data, stats, wall_s in runs:
-                path = folder / set_file(spec)
-                write_bytes_atomic(path, data)
-                entries[spec.index] = _entry(spec, path, stats, wall_s)
-                manifest = _write_manifest(folder, header, protocol.sets, entries)
-                if bar is not None and options.backend == "ray":
-                    bar.update(protocol.seconds_per_set)
-                line = _set_line(spec, stats, wall_s, len(entries), protocol.sets)
-                (bar.write if bar is not None else log)(line)
+            with closing(runs), sigterm_as_keyboard_interrupt():
+                for outcome in runs:
+                    spec = outcome.item
+                    data, stats, wall_s = outcome.get()  # a set's error stops the run
+                    path = folder / set_file(spec)
+                    write_bytes_atomic(path, data)
+                    entries[spec.index] = _entry(spec, path, stats, wall_s)
+                    manifest = _write_manifest(folder, header, protocol.sets, entries)
+                    if bar is not None and options.backend == "ray":
+                        bar.update(protocol.seconds_per_set)
+                    line = _set_line(spec, stats, wall_s, len(entries), protocol.sets)
+                    (bar.write if bar is not None else log)(line)
         except KeyboardInterrupt:
             left = protocol.sets - len(entries)
             log(
@@ -343,7 +291,6 @@ def collect(
             )
             raise
         finally:
-            signal.signal(signal.SIGTERM, previous)
             if bar is not None:
                 bar.close()
         assert manifest is not None
@@ -370,7 +317,3 @@ def _progress_bar(total_sim_s: float) -> Any:
         file=sys.stderr,
         bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim-s [{elapsed}<{remaining}]",
     )
-
-
-def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt
