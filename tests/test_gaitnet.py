@@ -124,19 +124,27 @@ def test_weights_file_errors_name_the_problem(tmp_path):
 
 
 @pytest.mark.slow
-def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid):
+def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path):
     """The shipped weights in Algorithm 1's loop: the humanoid walks 4 s on flat, every
     step start asked the net inside its iterations, each step lasts h' of its dt and the
-    dts stay inside the paper's bounds."""
+    dts stay inside the paper's bounds; mpc_log.csv records each step start's dt calls."""
     from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.results.rundir import read_csv_columns
     from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
     course, command = load_course("flat"), Command(0.5)
     ctrl = make_controller("gaitnet", ControllerContext(humanoid, course, command))
-    summary = run_episode(Simulator(humanoid, course), ctrl, command, 4.0, progress=False)
+    sim = Simulator(humanoid, course)
+    summary = run_episode(sim, ctrl, command, 4.0, out_dir=tmp_path, progress=False)
+    log = read_csv_columns(tmp_path / "mpc_log.csv")
+    full = log["full_solve"] == 1
+    steps = summary["dt_policy"]["steps"]
+    np.testing.assert_array_equal(log["dt_calls"][full], [len(d["dts_s"]) for d in steps])
+    np.testing.assert_allclose(log["dt_first_s"][full], [d["dts_s"][0] for d in steps])
+    assert np.all(np.isnan(log["dt_calls"][~full])) and np.all(log["failed"] == 0)
     assert not summary["fell"], summary["fall_reason"]
     assert summary["distance_m"] > 1.2
     policy = summary["dt_policy"]

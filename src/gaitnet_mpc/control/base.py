@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -129,6 +130,11 @@ class Controller(ABC):
     def step_durations_s(self) -> list[float]:
         """Planned duration of each step the controller started (empty if it does not step)."""
         return []
+
+    def last_dt_decision(self) -> dict[str, Any] | None:
+        """The dt policy's decision at the latest step start (``dts_s``, ``fallback``,
+        ``frozen``; ``mpc_log.csv``'s ``dt_*`` columns); None: no dt policy."""
+        return None
 
     def dt_policy_summary(self) -> dict[str, object] | None:
         """How a learned dt policy decided (``summary.json``'s ``dt_policy``); None: the

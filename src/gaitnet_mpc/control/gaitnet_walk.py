@@ -58,5 +58,8 @@ class GaitNetWalkController(KDWalkController):
             "members": net.spec.members,
         }
 
+    def last_dt_decision(self) -> dict[str, Any] | None:
+        return self.policy.decisions[-1].to_dict() if self.policy.decisions else None
+
     def dt_policy_summary(self) -> dict[str, Any] | None:
         return {**self.policy.summary(), "weights": self.weights_info}

@@ -50,5 +50,8 @@ class OracleWalkController(KDWalkController):
         super().__init__(robot, terrain, command, dt_policy=self.policy, config=config)
         self.policy.attach(self.mpc)
 
+    def last_dt_decision(self) -> dict[str, Any] | None:
+        return self.policy.decisions[-1].to_dict() if self.policy.decisions else None
+
     def dt_policy_summary(self) -> dict[str, Any] | None:
         return self.policy.summary()

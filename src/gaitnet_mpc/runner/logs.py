@@ -62,10 +62,14 @@ class MPCLog:
     """One row per MPC solve, written as ``mpc_log.csv``.
 
     ``dt_s`` is the MPC sampling time of the step the solve belongs to (NaN without a gait
-    schedule). For controllers that expose a kino-dynamic ``plan`` (``kd``), the
-    ``*_pred`` columns hold the momentum the plan predicts one stage ahead, at
-    ``t_pred_s``, and the ``*_meas`` columns the momentum measured at that tick (NaN when
-    the episode ended before it, or for other controllers).
+    schedule); ``failed``: the solve found no usable solution (the last plan was kept).
+    For a controller with a dt policy (``gaitnet``, ``oracle``), a full solve's row also
+    holds ``dt_calls`` (dts asked inside its iterations), ``dt_first_s`` (the first one),
+    ``dt_fallback`` (:data:`DT_FALLBACK_CODES`) and ``dt_frozen`` (1: the dt was frozen
+    after ``max_retimes`` changes); NaN elsewhere. For controllers that expose a
+    kino-dynamic ``plan`` (``kd``), the ``*_pred`` columns hold the momentum the plan
+    predicts one stage ahead, at ``t_pred_s``, and the ``*_meas`` columns the momentum
+    measured at that tick (NaN when the episode ended before it, or for other controllers).
     """
 
     columns: tuple[str, ...] = (
@@ -82,6 +86,11 @@ class MPCLog:
         "lGx_meas",
         "kGy_meas",
         "kGz_meas",
+        "failed",
+        "dt_calls",
+        "dt_first_s",
+        "dt_fallback",
+        "dt_frozen",
     )
     rows: list[list[float]] = field(default_factory=list)
 
@@ -110,6 +119,10 @@ def _csv(columns: tuple[str, ...], rows: list[Any]) -> str:
     np.savetxt(buf, data, delimiter=",", header=",".join(columns), comments="", fmt="%.6g")
     return buf.getvalue()
 
+
+#: ``mpc_log.csv``'s ``dt_fallback``: why a dt policy kept a dt it did not choose
+#: (``gaitnet``: ensemble spread, cycling; ``oracle``: no grid point converged).
+DT_FALLBACK_CODES: dict[str | None, int] = {None: 0, "spread": 1, "cycle": 2, "none converged": 3}
 
 #: Columns of ``log.csv`` holding the measured momentum ``[l_G; k_G]``.
 H_COLS = slice(EpisodeLog.columns.index("lGx"), EpisodeLog.columns.index("kGz") + 1)
@@ -162,12 +175,25 @@ class TelemetryRecorder:
                 1e3 * stats.solve_time_s[i],
                 dt,
             ]
-            self.log.rows.append(row + [np.nan] * (n_cols - len(row)))
+            row += [np.nan] * (n_cols - len(row))
+            row[self.log.columns.index("failed")] = float(stats.failed[i])
+            if stats.full_solve[i]:
+                row[-4:] = self._dt_decision()
+            self.log.rows.append(row)
         i_pred = self.log.columns.index("t_pred_s")
         self.log.rows[-1][i_pred : i_pred + 4] = self._prediction(t_s)
         self.last_qps = float(stats.qps_per_solve[n - 1])
         self.last_ms = 1e3 * stats.solve_time_s[n - 1]
         self.n_seen = n
+
+    def _dt_decision(self) -> list[float]:
+        """``[dt_calls, dt_first_s, dt_fallback, dt_frozen]`` of the last step start."""
+        d = self.controller.last_dt_decision()
+        if d is None:
+            return [np.nan] * 4
+        dts = d.get("dts_s") or [np.nan]
+        code = DT_FALLBACK_CODES.get(d.get("fallback"), np.nan)
+        return [float(len(dts)), float(dts[0]), float(code), float(bool(d.get("frozen")))]
 
     def _prediction(self, t_s: float) -> list[float]:
         """``[t_pred, l_G,x, k_G,y, k_G,z]`` one stage ahead of a plan made at ``t_s``."""
