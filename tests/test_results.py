@@ -120,6 +120,9 @@ class _FakeMPCController:
     def telemetry(self) -> Telemetry:
         return Telemetry(0.05, "left", "right", 0.25, self.prediction)
 
+    def last_dt_decision(self) -> dict | None:
+        return {"dts_s": [0.05, 0.055], "fallback": "spread", "frozen": False}
+
     def solve(self, t_s: float, full: bool) -> None:
         h = np.array([1.0 + t_s, 0.0, 0.0, 0.0, 0.2, -0.1])
         self.prediction = MomentumPrediction(t_s, t_s + 0.05, h)
@@ -140,6 +143,10 @@ def test_telemetry_recorder_logs_each_solve_and_the_prediction() -> None:
     row = dict(zip(MPCLog.columns, probe.log.rows[0], strict=True))
     assert row["full_solve"] == 1 and row["n_qps"] == 3 and row["dt_s"] == 0.05
     assert row["t_pred_s"] == pytest.approx(0.05) and row["lGx_pred"] == pytest.approx(1.0)
+    assert (row["dt_calls"], row["dt_first_s"], row["dt_fallback"]) == (2, 0.05, 1)
+    assert row["failed"] == 0 and row["dt_frozen"] == 0
+    replan = dict(zip(MPCLog.columns, probe.log.rows[1], strict=True))
+    assert np.isnan(replan["dt_calls"]) and np.isnan(replan["dt_fallback"])
     # measured momentum at the tick at or after t_pred
     t = np.arange(0, 0.1, 0.001)
     log = np.zeros((t.size, len(EpisodeLog.columns)))
