@@ -5,6 +5,7 @@ course and on the stepping stones, keeps every ``--every``-th problem, saves the
 ``--out/problems.npz`` (reused if present) and writes ``--out/table2.md``. Run::
 
     .venv/bin/python benchmarks/table2.py [--seconds 3] [--problems 40] [--out runs/table2]
+        [--no-joint-space]   # skip explicit KD-SQP and WBD-SQP (NLP builds of 2-20 s each)
 """
 
 from __future__ import annotations
@@ -22,6 +23,9 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=2, help="keep every n-th problem")
     parser.add_argument("--problems", type=int, default=40, help="problems in the table")
     parser.add_argument("--out", type=Path, default=Path("runs/table2"))
+    parser.add_argument(
+        "--no-joint-space", action="store_true", help="skip explicit KD-SQP and WBD-SQP"
+    )
     args = parser.parse_args()
     report = reproduce_table2(
         args.out,
@@ -29,6 +33,7 @@ def main() -> None:
         args.seconds,
         args.every,
         progress=lambda n, total: print(f"\r{n}/{total}", end="", file=sys.stderr, flush=True),
+        with_joint_space=not args.no_joint_space,
     )
     print(file=sys.stderr)
     print(report.read_text(), end="")

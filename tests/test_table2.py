@@ -1,4 +1,5 @@
-"""Table II pieces: problem recording round trip, CD-SQP, AD(3), variable counts."""
+"""Table II pieces: problem recording round trip, CD-SQP, AD(3), explicit KD-SQP, WBD-SQP,
+variable counts."""
 
 from __future__ import annotations
 
@@ -17,6 +18,13 @@ from gaitnet_mpc.table2.cd_problem import (
     rollout,
 )
 from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
+from gaitnet_mpc.table2.joint_space import (
+    DT_BOUNDS_S,
+    JointSpaceProblem,
+    SymbolicKinematics,
+    joint_space_problem,
+)
+from gaitnet_mpc.table2.kd_sqp import ExplicitKDSQP, KDSQPConfig
 from gaitnet_mpc.table2.problems import (
     Recording,
     RecordingSpec,
@@ -25,7 +33,8 @@ from gaitnet_mpc.table2.problems import (
     record_run,
     save_problems,
 )
-from gaitnet_mpc.table2.run import PAPER_TABLE2, variable_counts
+from gaitnet_mpc.table2.run import JOINT_SQP, PAPER_TABLE2, variable_counts
+from gaitnet_mpc.table2.wbd_sqp import WBDSQP
 
 #: A plan satisfies the CD constraints to this (dynamics in state units, positions in m).
 FEASIBLE = 1e-6
@@ -120,4 +129,76 @@ def test_variable_counts_for_h10() -> None:
     assert counts["CD-SQP"] == [300]  # 30 h (paper 34 h - 22 = 318)
     assert counts["AD(3)"] == [240, 120, 180]  # 24 h, 12 h, 18 h (paper 255, 201, 156)
     assert counts["proposed (implicit KD)"] == [345]  # 33 h + 15 (paper 33 h - 21 = 309)
+    assert counts["explicit KD-SQP"] == [640]  # 64 h (+ n_dt; paper 60 h)
+    assert counts["WBD-SQP"] == [1030]  # 103 h (+ n_dt; paper 78 h)
     assert PAPER_TABLE2["CD-SQP"][1] == 1.0
+
+
+@pytest.fixture(scope="module")
+def kinematics() -> SymbolicKinematics:
+    return SymbolicKinematics(kd_solver().robot)
+
+
+@pytest.fixture(scope="module")
+def joint_problem(saved: Path) -> JointSpaceProblem:
+    return joint_space_problem(kd_solver(), load_problems(saved, 1)[0].problem, 3)
+
+
+def test_symbolic_kinematics_match_pinocchio(
+    kinematics: SymbolicKinematics, joint_problem: JointSpaceProblem
+) -> None:
+    """CoM and eq. 6's momentum of the measured state equal the centroidal problem's
+    measured ``s0`` (Pinocchio); the foot centres are the measured ones to 3 mm."""
+    p = joint_problem
+    com = np.asarray(kinematics.com(p.qpos0)).ravel()
+    h = np.asarray(kinematics.momentum(p.qpos0, p.qvel0)).ravel()
+    np.testing.assert_allclose(com, p.cd.s0[:3], atol=1e-9)
+    np.testing.assert_allclose(h, np.concatenate([p.cd.s0[3:6], p.cd.s0[9:12]]), atol=1e-8)
+    feet = np.asarray(kinematics.feet(p.qpos0)).T
+    stance = p.cd.contact[0]
+    np.testing.assert_allclose(feet[stance], p.cd.pf_lb_m[0][stance], atol=3e-3)
+
+
+def test_explicit_kd_sqp_converges_to_a_feasible_plan(
+    kinematics: SymbolicKinematics, joint_problem: JointSpaceProblem
+) -> None:
+    solver = ExplicitKDSQP(kinematics, KDSQPConfig(sqp=JOINT_SQP))
+    p = joint_problem
+    assert solver.evaluate(p, solver.guess(p))[1] > 1.0  # it had work to do
+    res = solver.solve(p)
+    assert res.converged, res.status
+    assert 1 <= res.n_qps < 50
+    assert res.violation < FEASIBLE
+    used = p.dt_select.any(axis=1)
+    assert np.all(res.dts_s[used] >= DT_BOUNDS_S[0] - 1e-9)
+    assert np.all(res.dts_s[used] <= DT_BOUNDS_S[1] + 1e-9)
+    assert res.plan is not None
+    # the plan's centroidal states follow its wrenches through eq. 5 (explicit Euler on
+    # the momentum, as the CD problem's dynamics) and satisfy the wrench rows
+    viol = cd_violation(p.cd, res.plan)
+    assert viol["wrench"] < FEASIBLE
+    mom = np.hstack([res.plan.states[:, 3:6], res.plan.states[:, 9:12]])
+    f_sum = res.plan.f.sum(axis=1)
+    m, g = p.cd.config.mass_kg, p.cd.config.gravity_mps2
+    lin_rate = (mom[1:, :3] - mom[:-1, :3]) / res.dts_s[1:, None]
+    np.testing.assert_allclose(lin_rate, f_sum[1:] + np.array([0.0, 0.0, -m * g]), atol=1e-4)
+
+
+def test_wbd_sqp_converges_to_a_feasible_plan(
+    kinematics: SymbolicKinematics, joint_problem: JointSpaceProblem
+) -> None:
+    solver = WBDSQP(kinematics, sqp=JOINT_SQP)
+    p = joint_problem
+    assert solver.evaluate(p, solver.guess(p))[1] > 1.0
+    res = solver.solve(p)
+    assert res.converged, res.status
+    assert 1 <= res.n_qps < 50
+    assert res.violation < FEASIBLE
+    used = p.dt_select.any(axis=1)
+    assert np.all(res.dts_s[used] >= DT_BOUNDS_S[0] - 1e-9)
+    assert np.all(res.dts_s[used] <= DT_BOUNDS_S[1] + 1e-9)
+    # the stance foot of stage 0 has not moved at node 1 (no slip, on the ground)
+    feet0 = np.asarray(kinematics.feet(res.qpos[0])).T
+    feet1 = np.asarray(kinematics.feet(res.qpos[1])).T
+    i = int(np.argmax(p.cd.contact[0]))
+    np.testing.assert_allclose(feet1[i, 2], feet0[i, 2], atol=2e-3)

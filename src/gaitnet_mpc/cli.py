@@ -325,6 +325,11 @@ def _add_collect_parsers(sub: Any) -> None:
         default=40,
         help="table2: recorded MPC problems to solve, >= 1 (default: %(default)s)",
     )
+    rep.add_argument(
+        "--no-joint-space",
+        action="store_true",
+        help="table2: skip the explicit KD-SQP and WBD-SQP columns (the slow ones)",
+    )
     ds = sub.add_parser("dataset", help="data-set tools")
     ds_sub = ds.add_subparsers(dest="dataset_cmd", required=True)
     check = ds_sub.add_parser("check", help="validate a data-set folder")
@@ -394,7 +399,7 @@ def _reproduce(args: argparse.Namespace) -> int:
 
         if args.problems < 1:
             raise ConfigError("--problems", args.problems, "an integer >= 1")
-        report = reproduce_table2(out, args.problems)
+        report = reproduce_table2(out, args.problems, with_joint_space=not args.no_joint_space)
         print(report.read_text(), end="")
     else:
         from gaitnet_mpc.gaitnet.table1 import reproduce_table1

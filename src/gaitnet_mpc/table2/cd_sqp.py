@@ -10,7 +10,8 @@ Variables per stage ``k = 0 .. h-1`` (``30 h`` in all)::
 
     w_k = [s_k+1 (12: p_c, l_G, H_ang, k_G), f (2x3), tau (2x3), p_f (2x3)]
 
-Termination (Table X's step norms): ``sqpmethod`` has no step-norm test per variable
+Termination (Table X's step norms, :mod:`~gaitnet_mpc.table2.sqp_common`, shared with the
+joint-space baselines): ``sqpmethod`` has no step-norm test per variable
 group, so its own tests are switched off (``tol_pr = tol_du = 1e-14``, which no iterate
 reaches) and an ``iteration_callback`` stops it at the first iterate whose change from the
 previous one is within :class:`~gaitnet_mpc.mpc.kd_iterate.KDTolerances`: CoM and foot
@@ -24,64 +25,25 @@ indefinite), convexified by CasADi's ``convexify_strategy="regularize"``.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
-import sys
-import time
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.mpc.kd_iterate import KDTolerances
 from gaitnet_mpc.table2.cd_problem import NS_CD, CDProblem, CDSolution
+from gaitnet_mpc.table2.sqp_common import SQPConfig, StepTest, build_sqp, run_sqp
 
 NW = NS_CD + 18  # variables per stage: state 12, f 6, tau 6, p_f 6
 
 
-@contextlib.contextmanager
-def _quiet_c_stdout() -> Iterator[None]:
-    """Silence C-level stdout (qpOASES prints a licence banner when set up)."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-            yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+class CDSQPConfig(SQPConfig):
+    """Settings of the CD-SQP baseline (:class:`~gaitnet_mpc.table2.sqp_common.SQPConfig`)."""
 
 
-@dataclass(frozen=True)
-class CDSQPConfig:
-    """Settings of the CD-SQP baseline.
-
-    Attributes:
-        qpsol: CasADi conic plugin of the QP sub-problems (paper: ``"qpoases"``).
-        max_iter: SQP iteration cap (Algorithm 1's ``j_max``).
-        tolerances: Table X step norms (module docstring).
-        full_steps: no line search (``max_iter_ls = 0``).
-        convexify: CasADi ``convexify_strategy`` of the exact Hessian (None: none).
-        qpsol_options: extra options of the QP plugin (over the quiet defaults).
-    """
-
-    qpsol: str = "qpoases"
-    max_iter: int = 50
-    tolerances: KDTolerances = field(default_factory=KDTolerances)
-    full_steps: bool = False
-    convexify: str | None = None
-    qpsol_options: tuple[tuple[str, Any], ...] = ()
-
-    def __post_init__(self) -> None:
-        if not ca.has_conic(self.qpsol):
-            raise ConfigError("qpsol", self.qpsol, "a CasADi conic plugin (casadi.has_conic)")
-        if not isinstance(self.max_iter, int) or self.max_iter < 1:
-            raise ConfigError("max_iter", self.max_iter, "an integer >= 1")
+#: Step-test groups of CD-SQP (Table X): CoM and foot positions, forces, moments.
+GROUPS = ("position", "force", "moment")
 
 
 @dataclass(frozen=True)
@@ -102,60 +64,12 @@ class CDSQPResult:
     cost: float
 
 
-class _StepTest(ca.Callback):
-    """``iteration_callback``: stop once the iterate's change is within the tolerances."""
-
-    def __init__(self, n_x: int, n_g: int, n_p: int, groups: dict[str, np.ndarray]) -> None:
-        ca.Callback.__init__(self)
-        self._sizes = {"x": n_x, "f": 1, "g": n_g, "lam_x": n_x, "lam_g": n_g, "lam_p": n_p}
-        self._groups = groups
-        self.tolerances = KDTolerances()
-        self.previous: np.ndarray | None = None
-        self.converged = False
-        self.construct("cd_sqp_step_test", {})
-
-    def reset(self, tolerances: KDTolerances) -> None:
-        self.tolerances = tolerances
-        self.previous = None
-        self.converged = False
-
-    def get_n_in(self) -> int:
-        return int(ca.nlpsol_n_out())
-
-    def get_n_out(self) -> int:
-        return 1
-
-    def get_name_in(self, i: int) -> str:
-        return str(ca.nlpsol_out(i))
-
-    def get_name_out(self, i: int) -> str:
-        return "ret"
-
-    def get_sparsity_in(self, i: int) -> Any:
-        n = self._sizes.get(str(ca.nlpsol_out(i)), 0)
-        return ca.Sparsity.dense(n, 1) if n else ca.Sparsity(0, 0)
-
-    def eval(self, args: Sequence[Any]) -> list[Any]:  # type: ignore[override]
-        x = np.asarray(args[0], dtype=float).ravel()
-        prev, self.previous = self.previous, x
-        if prev is None:
-            return [0]
-        dx = np.abs(x - prev)
-        tol = self.tolerances
-        self.converged = bool(
-            dx[self._groups["position"]].max() <= tol.position_m
-            and dx[self._groups["force"]].max() <= tol.force_n
-            and dx[self._groups["moment"]].max() <= tol.moment_nm
-        )
-        return [1 if self.converged else 0]
-
-
 class CDSQP:
     """CD MPC by ``sqpmethod`` (module docstring). One NLP per ``(h, mw, separation)``."""
 
     def __init__(self, config: CDSQPConfig | None = None) -> None:
         self.config = config or CDSQPConfig()
-        self._solvers: dict[tuple[int, int, bool, float, float], tuple[Any, _StepTest]] = {}
+        self._solvers: dict[tuple[int, int, bool, float, float], tuple[Any, StepTest]] = {}
 
     @staticmethod
     def n_variables(horizon: int) -> int:
@@ -171,7 +85,7 @@ class CDSQP:
             "pf": base + NS_CD + 12 + np.arange(6),
         }
 
-    def _build(self, p: CDProblem) -> tuple[Any, _StepTest]:
+    def _build(self, p: CDProblem) -> tuple[Any, StepTest]:
         c = p.config
         h, mw = p.horizon, p.wrench_c.shape[2]
         sep = p.sep_axis is not None
@@ -228,42 +142,14 @@ class CDSQP:
             s = s_next
         g = ca.vertcat(*dyn, *wrench, *ties, *seps)
         cols = self._columns(h)
-        groups = {
-            "position": np.concatenate([cols["state"][:, :3].ravel(), cols["pf"].ravel()]),
-            "force": cols["f"].ravel(),
-            "moment": cols["tau"].ravel(),
-        }
-        test = _StepTest(w.numel(), g.numel(), params.numel(), groups)
-        cfg = self.config
-        opts: dict[str, Any] = {
-            "qpsol": cfg.qpsol,
-            "hessian_approximation": "exact",
-            "max_iter": cfg.max_iter,
-            "tol_pr": 1e-14,
-            "tol_du": 1e-14,
-            "min_step_size": 1e-16,
-            "iteration_callback": test,
-            "print_header": False,
-            "print_iteration": False,
-            "print_status": False,
-            "print_time": False,
-            "error_on_fail": False,
-        }
-        if cfg.qpsol == "qpoases":
-            opts["qpsol_options"] = {"printLevel": "none", "error_on_fail": False}
-        elif cfg.qpsol == "osqp":
-            opts["qpsol_options"] = {"osqp": {"verbose": False}, "error_on_fail": False}
-        else:
-            opts["qpsol_options"] = {"error_on_fail": False}
-        opts["qpsol_options"].update(dict(cfg.qpsol_options))
-        if cfg.convexify is not None:
-            opts["convexify_strategy"] = cfg.convexify
-        if cfg.full_steps:
-            opts["max_iter_ls"] = 0
-        with _quiet_c_stdout():
-            solver = ca.nlpsol(
-                "cd_sqp", "sqpmethod", {"x": w, "p": params, "f": cost, "g": g}, opts
-            )
+        pos = np.concatenate([cols["state"][:, :3].ravel(), cols["pf"].ravel()])
+        f_cols, tau_cols = cols["f"].ravel(), cols["tau"].ravel()
+
+        def measure(x: np.ndarray) -> dict[str, np.ndarray]:
+            return {"position": x[pos], "force": x[f_cols], "moment": x[tau_cols]}
+
+        nlp = {"x": w, "p": params, "f": cost, "g": g}
+        solver, test = build_sqp("cd_sqp", nlp, self.config, measure)
         self._solvers[key] = (solver, test)
         return solver, test
 
@@ -320,20 +206,12 @@ class CDSQP:
         from gaitnet_mpc.table2.cd_problem import cd_cost
 
         solver, test = self._build(p)
-        args = self._arguments(p)
-        test.reset(self.config.tolerances)
-        t0 = time.perf_counter()
-        try:
-            out = solver(**args)
-        except RuntimeError as exc:  # a QP plugin that asserts (OSQP on an indefinite H)
-            elapsed = time.perf_counter() - t0
+        run = run_sqp(solver, test, self.config, GROUPS, self._arguments(p))
+        if run.status.startswith("error"):
             guess = CDSolution(p.guess_states(), p.guess.f, p.guess.tau, p.guess.p_foot)
-            status = f"error: {str(exc).splitlines()[-1]}"
-            return CDSQPResult(guess, self.config.max_iter, False, elapsed, status, math.nan)
-        elapsed = time.perf_counter() - t0
-        stats = solver.stats()
+            return CDSQPResult(guess, run.n_qps, False, run.solve_time_s, run.status, math.nan)
         h = p.horizon
-        z = np.asarray(out["x"], dtype=float).ravel().reshape(h, NW)
+        z = run.x.reshape(h, NW)
         sol = CDSolution(
             states=z[:, :NS_CD].copy(),
             f=z[:, 12:18].reshape(h, 2, 3).copy(),
@@ -342,12 +220,12 @@ class CDSQP:
         )
         return CDSQPResult(
             solution=sol,
-            n_qps=int(stats["iter_count"]),
-            converged=test.converged,
-            solve_time_s=elapsed,
-            status=str(stats["return_status"]),
+            n_qps=run.n_qps,
+            converged=run.converged,
+            solve_time_s=run.solve_time_s,
+            status=run.status,
             cost=cd_cost(p, sol),
         )
 
 
-__all__ = ["CDSQP", "CDSQPConfig", "CDSQPResult"]
+__all__ = ["CDSQP", "GROUPS", "CDSQPConfig", "CDSQPResult"]

@@ -105,7 +105,10 @@ class RecordingSpec:
         vx_mps: commanded forward speed [m/s] (Table II: 0.75).
         duration_s: simulated time [s].
         dt_s: fixed MPC sampling time [s] (:class:`FixedDt`).
-        skip_s: problems solved before this time are dropped (start-up transient) [s].
+        skip_s: problems solved before this time are dropped (start-up transient; on the
+            stepping stones, the start platform) [s].
+        preview: walk with the multi-step footstep preview (``--preview``), which crosses
+            the built-in stones (the one-step preview falls on them).
     """
 
     course: str = "flat"
@@ -113,6 +116,7 @@ class RecordingSpec:
     duration_s: float = 2.0
     dt_s: float = 0.05
     skip_s: float = 0.3
+    preview: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.duration_s) and self.duration_s > 0.0):
@@ -135,7 +139,11 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
     """Walk ``spec.course`` with the ``kd`` controller, its solver replaced by a
     :class:`RecordingKDMPC` (stops early at a fall)."""
     from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, walk_terrain
+    from gaitnet_mpc.control.kd_walk_config import (
+        KDWalkConfig,
+        preview_walk_config,
+        walk_terrain,
+    )
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.sim.simulator import Simulator
@@ -143,7 +151,7 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
 
     robot = load_robot(robot_name)
     course = load_course(spec.course)
-    config = KDWalkConfig()
+    config = preview_walk_config(KDWalkConfig()) if spec.preview else KDWalkConfig()
     command = Command(vx_mps=spec.vx_mps)
     ctrl = KDWalkController(
         robot, walk_terrain(course, config), command, FixedDt(spec.dt_s), config
@@ -375,7 +383,10 @@ def kd_solver(robot_name: str = "humanoid3d", dt_s: float = 0.05) -> SequentialK
     """A fresh :class:`SequentialKDMPC` configured exactly as the ``kd`` controller's
     (robot mass, line-foot lengths, foot separation; :class:`FixedDt` of ``dt_s``)."""
     from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, walk_terrain
+    from gaitnet_mpc.control.kd_walk_config import (
+        KDWalkConfig,
+        walk_terrain,
+    )
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.terrain import load_course

@@ -10,6 +10,12 @@ each with
   qpOASES (sparse mode), and with ``with_osqp`` an extra row with OSQP (which asserts on
   the indefinite QPs of the exact Hessian now and then: counted as not converged);
 * **AD(3)**: :class:`~gaitnet_mpc.table2.ad3.AD3`;
+* with ``with_joint_space``: **explicit KD-SQP** (:class:`~gaitnet_mpc.table2.kd_sqp.
+  ExplicitKDSQP`, eqs. 5-9) and **WBD-SQP** (:class:`~gaitnet_mpc.table2.wbd_sqp.WBDSQP`,
+  eqs. 1-4), both with one dt variable per step, on the problem mapped to joint space
+  (:func:`~gaitnet_mpc.table2.joint_space.joint_space_problem`), ``sqpmethod`` with PIQP
+  on the regularised exact Hessian (qpOASES needed 92 s per solve on the 650-variable KD
+  QPs, sparse mode, 310 s dense: :data:`JOINT_SQP`);
 
 all cold from the same ``u^0`` (the references, weight shared by the stance feet) and
 stopped by the same step test (Table X). The CD problem of each KD problem is built
@@ -34,7 +40,19 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.table2.ad3 import AD3
 from gaitnet_mpc.table2.cd_problem import CDSolution, cd_cost, centroidal_problem, rollout
 from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
+from gaitnet_mpc.table2.joint_space import (
+    SymbolicKinematics,
+    joint_space_problem,
+    max_dt_variables,
+)
+from gaitnet_mpc.table2.kd_sqp import ExplicitKDSQP, KDSQPConfig
 from gaitnet_mpc.table2.problems import kd_solver, load_problems
+from gaitnet_mpc.table2.sqp_common import SQPConfig
+from gaitnet_mpc.table2.wbd_sqp import WBDSQP
+
+#: ``sqpmethod`` settings of the joint-space baselines: PIQP on the exact Hessian made
+#: positive definite by CasADi's ``regularize`` (qpOASES: module docstring).
+JOINT_SQP = SQPConfig(qpsol="piqp", convexify="regularize")
 
 #: The paper's Table II: method -> (variable size, normalised solve time, QPs per solve).
 PAPER_TABLE2: dict[str, tuple[str, float, float]] = {
@@ -46,8 +64,8 @@ PAPER_TABLE2: dict[str, tuple[str, float, float]] = {
 }
 #: Our variable counts (formula in h) per method row.
 OUR_VARIABLES: dict[str, str] = {
-    "WBD-SQP": "not built",
-    "explicit KD-SQP": "not built",
+    "WBD-SQP": "103h+n_dt",
+    "explicit KD-SQP": "64h+n_dt",
     "CD-SQP": "30h",
     "CD-SQP (OSQP)": "30h",
     "AD(3)": "24h, 12h, 18h",
@@ -60,7 +78,10 @@ def variable_counts(horizon: int) -> dict[str, list[int]]:
     from gaitnet_mpc.mpc.kd_layout import KDLayout
 
     ad = AD3.n_variables(horizon)
+    nq, nv, nj, nc = 25, 24, 18, 4  # humanoid3d: qpos, qvel, joints, contact points
     return {
+        "WBD-SQP": [(nq + 2 * nv + nj + 3 * nc) * horizon],
+        "explicit KD-SQP": [(nq + nv + 15) * horizon],
         "CD-SQP": [CDSQP.n_variables(horizon)],
         "AD(3)": [ad["forces"], ad["com"], ad["footholds"]],
         "proposed (implicit KD)": [KDLayout(horizon).n],
@@ -125,9 +146,12 @@ def run_table2(
     n_problems: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     with_osqp: bool = False,
+    with_joint_space: bool = True,
 ) -> Table2Result:
     """Solve the first ``n_problems`` recorded problems with every method (module
-    docstring) and return the table's rows."""
+    docstring) and return the table's rows; ``with_joint_space=False`` skips the slow
+    explicit KD-SQP and WBD-SQP columns (their NLPs take 2-20 s to build per contact
+    pattern)."""
     recorded = load_problems(problems_path, n_problems)
     if not recorded:
         raise ConfigError("problems", str(problems_path), "a file with at least one problem")
@@ -136,11 +160,16 @@ def run_table2(
     sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
     sqp_osqp = CDSQP(CDSQPConfig(qpsol="osqp")) if with_osqp else None
     ad3 = AD3()
-    stats: dict[str, MethodStats] = {
-        name: MethodStats()
-        for name in ("proposed (implicit KD)", "CD-SQP", "CD-SQP (OSQP)", "AD(3)")
-        if name != "CD-SQP (OSQP)" or with_osqp
-    }
+    names = ["proposed (implicit KD)", "CD-SQP", "AD(3)"]
+    names += ["CD-SQP (OSQP)"] if with_osqp else []
+    kd_sqp: ExplicitKDSQP | None = None
+    wbd_sqp: WBDSQP | None = None
+    if with_joint_space:
+        kin = SymbolicKinematics(kd.robot)
+        kd_sqp = ExplicitKDSQP(kin, KDSQPConfig(sqp=JOINT_SQP))
+        wbd_sqp = WBDSQP(kin, sqp=JOINT_SQP)
+        names += ["explicit KD-SQP", "WBD-SQP"]
+    stats: dict[str, MethodStats] = {name: MethodStats() for name in names}
     horizon = 0
     for n, rec in enumerate(recorded):
         cd = centroidal_problem(cd_builder, rec.problem)
@@ -160,14 +189,32 @@ def run_table2(
             stats["CD-SQP (OSQP)"].add(r_o.solve_time_s, r_o.n_qps, r_o.converged, r_o.cost)
         r_ad = ad3.solve(cd)
         stats["AD(3)"].add(r_ad.solve_time_s, r_ad.n_qps, r_ad.converged, r_ad.cost)
+        if kd_sqp is not None and wbd_sqp is not None:
+            sps = int(rec.problem.timing.stages_per_step)
+            jp = joint_space_problem(cd_builder, rec.problem, max_dt_variables(cd.horizon, sps), cd)
+            kd_sqp.prepare(jp)
+            wbd_sqp.prepare(jp)
+            r_kd = kd_sqp.solve(jp)
+            stats["explicit KD-SQP"].add(
+                r_kd.solve_time_s, r_kd.n_qps, r_kd.converged, r_kd.eq18_cost
+            )
+            r_wb = wbd_sqp.solve(jp)
+            stats["WBD-SQP"].add(r_wb.solve_time_s, r_wb.n_qps, r_wb.converged, r_wb.eq18_cost)
         if progress is not None:
             progress(n + 1, len(recorded))
     base_time = float(np.mean(stats["CD-SQP"].times_s))
     base_cost = np.asarray(stats["CD-SQP"].costs)
     rows = []
-    for name in ("WBD-SQP", "explicit KD-SQP"):
-        rows.append(MethodRow(name, math.nan, math.nan, math.nan, math.nan, math.nan, "not built"))
-    for name, st in stats.items():
+    order = ["WBD-SQP", "explicit KD-SQP", "CD-SQP", "CD-SQP (OSQP)", "AD(3)"]
+    order += ["proposed (implicit KD)"]
+    for name in order:
+        if name not in stats:
+            if name in ("WBD-SQP", "explicit KD-SQP"):
+                rows.append(
+                    MethodRow(name, math.nan, math.nan, math.nan, math.nan, math.nan, "skipped")
+                )
+            continue
+        st = stats[name]
         mean_t = float(np.mean(st.times_s))
         rows.append(
             MethodRow(
@@ -176,11 +223,18 @@ def run_table2(
                 time_ratio=mean_t / base_time,
                 mean_qps=float(np.mean(st.qps)),
                 convergence_rate=float(np.mean(st.converged)),
-                cost_ratio=float(np.nanmedian(np.asarray(st.costs) / base_cost)),
+                cost_ratio=_median_ratio(np.asarray(st.costs), base_cost),
                 variables=OUR_VARIABLES[name],
             )
         )
     return Table2Result(rows, len(recorded), horizon, machine_line())
+
+
+def _median_ratio(costs: np.ndarray, base: np.ndarray) -> float:
+    """Median of ``costs / base`` over the finite entries (NaN if none)."""
+    ratio = costs / base
+    ratio = ratio[np.isfinite(ratio)]
+    return float(np.median(ratio)) if ratio.size else math.nan
 
 
 def _fmt(x: float, spec: str) -> str:
@@ -216,6 +270,15 @@ def table2_markdown(result: Table2Result) -> str:
         "(sparse), exact Hessian. Proposed = Algorithm 1 with PIQP, whose references are "
         "re-made by IK each iteration (line 9); its cost column scores its plan on the CD "
         "problem's frozen references.",
+        "",
+        "Explicit KD-SQP (eqs. 5-9) and WBD-SQP (eqs. 1-4) keep q, qdot in the variables "
+        "and one dt per step in [0.045, 0.07] s (the step in progress keeps its recorded "
+        "stage lengths unless the problem is a step start); sqpmethod with PIQP on the "
+        "regularised exact Hessian (qpOASES took 92 s per KD solve); the same step test "
+        "on the CoM and foot centres (forward kinematics), forces, moments and dt, and a "
+        "converged solve must also be feasible to 1e-6. KD-SQP's cost column scores its "
+        "plan (p_c(q), A_G(q) qdot, its own dt) by eq. 18; WBD-SQP minimises eq. 2, not "
+        "comparable (n/a). n_dt: steps in the horizon (2-3).",
     ]
     return "\n".join(lines)
 
@@ -226,11 +289,14 @@ def reproduce_table2(
     seconds_per_course: float = 3.0,
     every: int = 2,
     progress: Callable[[int, int], None] | None = None,
+    with_joint_space: bool = True,
 ) -> Path:
     """Record problems into ``out_dir/problems.npz`` unless present (every ``every``-th
-    problem of ``seconds_per_course`` of walking on each of :data:`TABLE2_COURSES`,
-    courses alternating), run :func:`run_table2` on the first ``n_problems`` and write
-    ``out_dir/table2.md``; returns that path."""
+    problem of ``seconds_per_course`` of walking on each of :data:`TABLE2_COURSES`, on
+    the stones after the start platform and with the footstep preview; courses
+    alternating), run :func:`run_table2` on the first ``n_problems`` and write
+    ``out_dir/table2.md``; returns that path. ``with_joint_space=False`` skips explicit
+    KD-SQP and WBD-SQP."""
     from gaitnet_mpc.table2.problems import (
         TABLE2_COURSES,
         RecordingSpec,
@@ -241,10 +307,13 @@ def reproduce_table2(
     out = Path(out_dir)
     path = out / "problems.npz"
     if not path.exists():
-        per_course = [
-            record_problems(RecordingSpec(course=c, duration_s=seconds_per_course))[::every]
-            for c in TABLE2_COURSES
-        ]
+        specs = {  # on the stones: from the first stone (0.88 m, ~1.4 s) on, with the preview
+            "flat": RecordingSpec("flat", duration_s=seconds_per_course),
+            "stepping-stones": RecordingSpec(
+                "stepping-stones", duration_s=1.4 + seconds_per_course, skip_s=1.4, preview=True
+            ),
+        }
+        per_course = [record_problems(specs[c])[::every] for c in TABLE2_COURSES]
         problems, courses = [], []
         for i in range(max(len(x) for x in per_course)):  # alternate the courses
             for course, got in zip(TABLE2_COURSES, per_course, strict=True):
@@ -252,13 +321,14 @@ def reproduce_table2(
                     problems.append(got[i])
                     courses.append(course)
         save_problems(path, problems, courses)
-    result = run_table2(path, n_problems, progress=progress)
+    result = run_table2(path, n_problems, progress=progress, with_joint_space=with_joint_space)
     report = out / "table2.md"
     report.write_text(table2_markdown(result) + "\n")
     return report
 
 
 __all__ = [
+    "JOINT_SQP",
     "OUR_VARIABLES",
     "PAPER_TABLE2",
     "MethodRow",
