@@ -11,7 +11,7 @@ humanoid3d at 0.75 m/s with the paper's one-step preview. Rows:
   foothold violation, no leg-leg contact.
 
 Controllers: ``gaitnet`` (policy settings as shipped), ``gaitnet:r<K>`` (``max_retimes``
-K), ``oracle``, ``kd@<dt>``. Writes ``benchmarks/results/gaitnet_runs.md``. Run::
+K; ``r0``: no limit), ``oracle``, ``kd@<dt>``. Writes ``benchmarks/results/gaitnet_runs.md``. Run::
 
     .venv/bin/python benchmarks/gaitnet_runs.py [--seeds 20] [--dts 0.045,0.055,0.065] \
         [--courses gap,stepping-stones] [--weights PATH] [--jobs 2] \
@@ -52,7 +52,10 @@ def run(job: Job, weights: str | None) -> dict:
         from gaitnet_mpc.control.registry import controller_config
         from gaitnet_mpc.gaitnet.policy import GaitNetPolicyConfig
 
-        retimes = int(name.split(":r")[1]) if ":r" in name else None
+        policy = GaitNetPolicyConfig()  # as shipped; gaitnet:r0 = no limit, gaitnet:rK = K
+        if ":r" in name:
+            k = int(name.split(":r")[1])
+            policy = GaitNetPolicyConfig(max_retimes=k if k > 0 else None)
         config = controller_config("gaitnet", planar=False)
         ctrl = GaitNetWalkController(
             robot,
@@ -60,7 +63,7 @@ def run(job: Job, weights: str | None) -> dict:
             command,
             load_gaitnet(robot, weights),
             config,
-            GaitNetPolicyConfig(max_retimes=retimes),
+            policy,
         )
     elif name == "oracle":
         ctrl = make_controller("oracle", ControllerContext(robot, course, command))

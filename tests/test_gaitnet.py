@@ -195,7 +195,8 @@ def _step_start(monkeypatch):
 def test_policy_freezes_a_drifting_dt_after_max_retimes(_step_start):
     from gaitnet_mpc.gaitnet.policy import GaitNetDt, GaitNetPolicyConfig
 
-    free = GaitNetDt(_DriftingNet(), planar=False)  # type: ignore[arg-type]
+    unlimited = GaitNetPolicyConfig(max_retimes=None)  # Algorithm 1 as printed
+    free = GaitNetDt(_DriftingNet(), False, unlimited)  # type: ignore[arg-type]
     assert _ask(free, _step_start(), 6)[-1] == pytest.approx(0.07)  # drifts to the bound
     capped = GaitNetDt(_DriftingNet(), False, GaitNetPolicyConfig(max_retimes=2))  # type: ignore[arg-type]
     dts = _ask(capped, _step_start(), 6)

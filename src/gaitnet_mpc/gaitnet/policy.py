@@ -55,7 +55,8 @@ class GaitNetPolicyConfig:
         cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
         max_damped: damped iterations before a cycling solve falls back.
         max_retimes: dt changes per step start before the dt is frozen; None: no limit
-            (Algorithm 1 as printed).
+            (Algorithm 1 as printed). 2 on tuning gaps: 10/10 without a fall, against
+            6/10 without a limit and 9/10 with 1.
     """
 
     dt_bounds_s: tuple[float, float] | None = None
@@ -63,7 +64,7 @@ class GaitNetPolicyConfig:
     max_spread_s: float = 0.006
     cycle_tolerance_s: float = 5e-4
     max_damped: int = 3
-    max_retimes: int | None = None
+    max_retimes: int | None = 2  # chosen on tuning gap seeds 100-109 (gaitnet_runs_tuning.md)
 
     def __post_init__(self) -> None:
         b = self.dt_bounds_s
