@@ -206,11 +206,15 @@ def test_policy_freezes_a_drifting_dt_after_max_retimes(_step_start):
 
 
 def test_policy_falls_back_on_a_wide_spread(_step_start):
-    from gaitnet_mpc.gaitnet.policy import GaitNetDt
+    from gaitnet_mpc.gaitnet.policy import GaitNetDt, GaitNetPolicyConfig
 
     policy = GaitNetDt(_DriftingNet(spread_s=0.02), planar=False)  # type: ignore[arg-type]
     assert _ask(policy, _step_start(), 3) == pytest.approx([0.045] * 3)  # the nominal dt
     assert policy.summary()["fallbacks"]["spread"] == 1
+    paper = GaitNetPolicyConfig(safeguards=False)  # Algorithm 1 as printed: the net's dt
+    bare = GaitNetDt(_DriftingNet(spread_s=0.02), False, paper)  # type: ignore[arg-type]
+    assert _ask(bare, _step_start(), 6) == pytest.approx([0.05, 0.055, 0.06, 0.065, 0.07, 0.07])
+    assert bare.summary()["fallbacks"]["spread"] == 0
 
 
 @pytest.mark.slow

@@ -144,11 +144,14 @@ def _kd(ctx: ControllerContext) -> Controller:
 def _gaitnet(ctx: ControllerContext) -> Controller:
     from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController, load_gaitnet
     from gaitnet_mpc.control.kd_walk_config import walk_terrain
+    from gaitnet_mpc.gaitnet.policy import GaitNetPolicyConfig
 
     config = _config("gaitnet", ctx)
     net = load_gaitnet(ctx.robot, ctx.options.get("gaitnet_weights"))
     terrain = walk_terrain(ctx.course, config)
-    return GaitNetWalkController(ctx.robot, terrain, ctx.command, net, config)
+    # the paper preset runs Algorithm 1 as printed: no fallbacks, no cap on re-timings
+    policy = GaitNetPolicyConfig(safeguards=ctx.options.get("preset") != "paper")
+    return GaitNetWalkController(ctx.robot, terrain, ctx.command, net, config, policy)
 
 
 def _oracle(ctx: ControllerContext) -> Controller:

@@ -5,7 +5,7 @@ At a step start every sequential iteration asks the policy for the step's dt. Th
 builds the features of the step start (:func:`~gaitnet_mpc.dataset.step_features.step_features`)
 from the measured state and the iterate's planned touchdown of the swing foot, and returns
 the network's dt, clipped into the paper's bounds ([0.045, 0.07] s in 3-D, [0.03, 0.06] s
-in 2-D, Sec. V-E1). Two safeguards (paper Sec. VI names the failure: dts that do not
+in 2-D, Sec. V-E1). Three safeguards (paper Sec. VI names the failure: dts that do not
 settle and solves that hit ``j_max``):
 
 * **out of distribution**: when the ensemble's spread exceeds ``max_spread_s`` the input
@@ -54,6 +54,8 @@ class GaitNetPolicyConfig:
         max_spread_s: ensemble spread [s] above which the input counts as unknown.
         cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
         max_damped: damped iterations before a cycling solve falls back.
+        safeguards: False: none of the three (the network's clipped dt at every
+            iteration, Algorithm 1 as printed; ``gaitnet --preset paper``).
         max_retimes: dt changes per step start before the dt is frozen; None: no limit
             (Algorithm 1 as printed). 2 on tuning gaps: 10/10 without a fall, against
             6/10 without a limit and 9/10 with 1.
@@ -64,6 +66,7 @@ class GaitNetPolicyConfig:
     max_spread_s: float = 0.006
     cycle_tolerance_s: float = 5e-4
     max_damped: int = 3
+    safeguards: bool = True
     max_retimes: int | None = 2  # chosen on tuning gap seeds 100-109 (gaitnet_runs_tuning.md)
 
     def __post_init__(self) -> None:
@@ -135,7 +138,7 @@ class GaitNetDt:
     def _choose(self, problem: KDProblem, iterate: KDIterate, d: Decision) -> float:
         if d.fallback is not None or d.frozen:
             return d.dts_s[-1]
-        limit = self.config.max_retimes
+        limit = self.config.max_retimes if self.config.safeguards else None
         if limit is not None and d.dts_s:
             changes = np.abs(np.diff([d.start_dt_s, *d.dts_s])) > self.config.cycle_tolerance_s
             if int(np.sum(changes)) >= limit:
@@ -150,6 +153,8 @@ class GaitNetDt:
         dt, spread = self.net.predict(x[self._columns])
         d.spreads_s.append(spread)
         lo, hi = self.bounds_s
+        if not self.config.safeguards:
+            return min(max(dt, lo), hi)
         if spread > self.config.max_spread_s:
             d.fallback = "spread"
             return min(max(self._previous_dt_s(), lo), hi)
