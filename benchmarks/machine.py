@@ -2,28 +2,14 @@
 
 from __future__ import annotations
 
-import os
-import platform
 import sys
 from collections.abc import Callable
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
+from gaitnet_mpc.machine import machine_info
 
-def machine_info(packages: tuple[str, ...] = ("numpy", "mujoco", "pin")) -> str:
-    """One Markdown line naming the CPU, core count, Python and package versions."""
-    parts = [
-        f"CPU: {platform.processor() or platform.machine()}",
-        f"cores: {os.cpu_count()}",
-        f"Python {platform.python_version()}",
-    ]
-    for name in packages:
-        try:
-            parts.append(f"{name} {version(name)}")
-        except PackageNotFoundError:
-            parts.append(f"{name} (not installed)")
-    return ", ".join(parts)
+__all__ = ["machine_info", "run_pool", "write_report"]
 
 
 def write_report(name: str, report: str) -> None:

@@ -27,16 +27,14 @@ through the exact dynamics), reported as the median ratio to CD-SQP's cost.
 from __future__ import annotations
 
 import math
-import os
-import platform
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.machine import machine_info
 from gaitnet_mpc.table2.ad3 import AD3
 from gaitnet_mpc.table2.cd_problem import CDSolution, cd_cost, centroidal_problem, rollout
 from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
@@ -126,21 +124,6 @@ class Table2Result:
     machine: str
 
 
-def machine_line(packages: tuple[str, ...] = ("numpy", "casadi", "piqp", "mujoco", "pin")) -> str:
-    """CPU, cores, Python and package versions (as ``benchmarks/machine.py`` prints)."""
-    parts = [
-        f"CPU: {platform.processor() or platform.machine()}",
-        f"cores: {os.cpu_count()}",
-        f"Python {platform.python_version()}",
-    ]
-    for name in packages:
-        try:
-            parts.append(f"{name} {version(name)}")
-        except PackageNotFoundError:
-            parts.append(f"{name} (not installed)")
-    return ", ".join(parts)
-
-
 def run_table2(
     problems_path: Path | str,
     n_problems: int | None = None,
@@ -227,7 +210,9 @@ def run_table2(
                 variables=OUR_VARIABLES[name],
             )
         )
-    return Table2Result(rows, len(recorded), horizon, machine_line())
+    return Table2Result(
+        rows, len(recorded), horizon, machine_info(("numpy", "casadi", "piqp", "mujoco", "pin"))
+    )
 
 
 def _median_ratio(costs: np.ndarray, base: np.ndarray) -> float:
@@ -333,7 +318,6 @@ __all__ = [
     "PAPER_TABLE2",
     "MethodRow",
     "Table2Result",
-    "machine_line",
     "reproduce_table2",
     "run_table2",
     "table2_markdown",
