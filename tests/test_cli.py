@@ -297,9 +297,10 @@ def test_ctrl_c_and_sigterm_save_the_run_and_exit_130(tmp_path: Path, sig: str) 
     cmd += ["--duration", "120", "--no-video", "--no-plots", "--no-progress", "--out", str(out)]
     env = {**os.environ, "MUJOCO_GL": "egl"}
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
-    deadline = time.monotonic() + 60
-    while not out.exists() and time.monotonic() < deadline:  # created just before simulating
-        time.sleep(0.05)
+    assert proc.stderr is not None
+    for line in proc.stderr:  # printed just before the simulation loop starts
+        if line.startswith("simulating "):
+            break
     time.sleep(1.0)
     proc.send_signal(getattr(signal, sig))
     stdout, stderr = proc.communicate(timeout=60)

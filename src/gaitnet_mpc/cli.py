@@ -569,6 +569,11 @@ def _run(args: argparse.Namespace) -> int:
     }
     video = None if args.no_video else VideoConfig(camera=args.camera, overlay=not args.no_overlay)
     viewer = _open_viewer(sim, robot.spec.trunk_body) if args.viewer else None
+    print(
+        f"simulating {args.duration:g} s: {args.controller} on {robot.name}, {args.course}",
+        file=sys.stderr,
+        flush=True,
+    )
     try:
         summary = run_episode(
             sim,
