@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, sigterm_as_keyboard_interrupt
+from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
 from machine import machine_info
 
 RESULTS = Path(__file__).parent / "results"
@@ -622,7 +622,7 @@ def soak(
     t0 = time.perf_counter()
     interrupted = False
     try:
-        with sigterm_as_keyboard_interrupt():
+        with stop_signals_as_keyboard_interrupt():
             for n, record in enumerate(runs, 1):
                 _append(path, record)
                 records[record["index"]] = record

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.parallel import run_processes, sigterm_as_keyboard_interrupt
+from gaitnet_mpc.parallel import run_processes, stop_signals_as_keyboard_interrupt
 
 
 def _square(x: int) -> int:
@@ -81,7 +81,7 @@ def test_bad_worker_count_is_refused() -> None:
 
 def test_sigterm_becomes_keyboard_interrupt_inside_the_block() -> None:
     before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(KeyboardInterrupt), sigterm_as_keyboard_interrupt():
+    with pytest.raises(KeyboardInterrupt), stop_signals_as_keyboard_interrupt():
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5.0)  # the handler runs at the next bytecode; never reached
     assert signal.getsignal(signal.SIGTERM) == before

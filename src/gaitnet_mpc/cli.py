@@ -13,7 +13,6 @@ import argparse
 import json
 import math
 import os
-import signal
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -684,11 +683,6 @@ def _ineffective_options(
     return out
 
 
-def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
-    """SIGTERM handler during a run: stop it like Ctrl-C (what was simulated is saved)."""
-    raise KeyboardInterrupt
-
-
 def _outcome_line(summary: dict[str, Any]) -> str:
     """One line that says how the run ended: OK, FELL or INTERRUPTED, with key numbers."""
     t = summary["duration_s"]
@@ -747,12 +741,11 @@ def main(argv: list[str] | None = None) -> int:
     args.argv = argv
     try:
         if args.cmd == "run":
-            # SIGTERM stops a run like Ctrl-C, from start-up through plotting
-            previous_sigterm = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
-            try:
+            # SIGTERM and SIGINT stop a run like Ctrl-C, from start-up through plotting
+            from gaitnet_mpc.parallel import stop_signals_as_keyboard_interrupt
+
+            with stop_signals_as_keyboard_interrupt():
                 return _run(args)
-            finally:
-                signal.signal(signal.SIGTERM, previous_sigterm)
         if args.cmd == "plot":
             return _plot(args)
         if args.cmd == "compare":

@@ -11,8 +11,9 @@ items *finish*, with at most a fixed number of items in flight, so that:
   inside it, or :meth:`~collections.abc.Generator.close`) stops the workers at once; the
   items in progress are lost.
 
-:func:`sigterm_as_keyboard_interrupt` makes SIGTERM stop a run as Ctrl-C does (the CLI
-turns the :class:`KeyboardInterrupt` into exit status 130).
+:func:`stop_signals_as_keyboard_interrupt` makes SIGTERM and SIGINT (even one inherited
+as ignored) stop a run as Ctrl-C does (the CLI turns the :class:`KeyboardInterrupt` into
+exit status 130).
 """
 
 from __future__ import annotations
@@ -214,14 +215,21 @@ def run_ray(
 
 
 @contextmanager
-def sigterm_as_keyboard_interrupt() -> Iterator[None]:
-    """Inside the block, SIGTERM raises :class:`KeyboardInterrupt` (as Ctrl-C does); the
-    previous handler is restored on exit. Main thread only."""
-    previous = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+def stop_signals_as_keyboard_interrupt() -> Iterator[None]:
+    """Inside the block, SIGTERM and SIGINT raise :class:`KeyboardInterrupt`; the previous
+    handlers are restored on exit. Main thread only.
+
+    SIGINT is set as well because a process started in the background of a
+    non-interactive shell (``cmd &``, ``nohup``) inherits it ignored, and Python then
+    never raises KeyboardInterrupt: such a run could not be stopped with ``kill -INT``.
+    """
+    previous_term = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGTERM, previous_term)
+        signal.signal(signal.SIGINT, previous_int)
 
 
 def _raise_keyboard_interrupt(signum: int, frame: object) -> None:

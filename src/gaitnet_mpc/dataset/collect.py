@@ -45,7 +45,7 @@ from gaitnet_mpc.dataset.store import (
 )
 from gaitnet_mpc.dataset.teachers import teacher_config
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, sigterm_as_keyboard_interrupt
+from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
 from gaitnet_mpc.results.io import write_bytes_atomic, write_json_atomic
 
 BACKENDS = ("process", "ray")
@@ -271,7 +271,7 @@ def collect(
 
         runs = _runs(todo, options, on_progress if bar is not None else None)
         try:
-            with closing(runs), sigterm_as_keyboard_interrupt():
+            with closing(runs), stop_signals_as_keyboard_interrupt():
                 for outcome in runs:
                     spec = outcome.item
                     data, stats, wall_s = outcome.get()  # a set's error stops the run
