@@ -59,7 +59,7 @@ from gaitnet_mpc.table2.joint_space import (
 from gaitnet_mpc.table2.sqp_common import (
     SQPConfig,
     build_sqp,
-    constraint_violation,
+    objective_and_violation,
     run_sqp,
 )
 
@@ -379,12 +379,7 @@ class ExplicitKDSQP:
     def evaluate(self, p: JointSpaceProblem, x: np.ndarray) -> tuple[float, float]:
         """(objective, largest constraint/bound violation) of ``p`` at ``x``."""
         entry = self._build(p)
-        args = self._arguments(p, entry)
-        g, obj = entry["g_fun"](x, args["p"])
-        viol = constraint_violation(
-            np.asarray(g).ravel(), args["lbg"], args["ubg"], x, args["lbx"], args["ubx"]
-        )
-        return float(obj), viol
+        return objective_and_violation(entry["g_fun"], self._arguments(p, entry), x)
 
     def solve(self, p: JointSpaceProblem, feasibility_tol: float = 1e-6) -> JointSQPResult:
         """Solve ``p`` cold (module docstring); converged: the step test stopped it at a

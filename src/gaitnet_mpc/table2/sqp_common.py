@@ -227,6 +227,16 @@ def constraint_violation(
     return max(float(np.max(np.nan_to_num(v, nan=0.0, neginf=0.0), initial=0.0)) for v in parts)
 
 
+def objective_and_violation(g_fun: Any, args: dict[str, Any], x: np.ndarray) -> tuple[float, float]:
+    """(objective, largest constraint/bound violation) at ``x`` of an NLP whose
+    ``g_fun(x, p)`` gives (g, objective) and whose ``args`` hold p and the bounds."""
+    g, obj = g_fun(x, args["p"])
+    viol = constraint_violation(
+        np.asarray(g).ravel(), args["lbg"], args["ubg"], x, args["lbx"], args["ubx"]
+    )
+    return float(obj), viol
+
+
 __all__ = [
     "Measure",
     "SQPConfig",
@@ -234,6 +244,7 @@ __all__ = [
     "StepTest",
     "build_sqp",
     "constraint_violation",
+    "objective_and_violation",
     "quiet_c_stdout",
     "run_sqp",
     "sqp_options",

@@ -39,7 +39,7 @@ from gaitnet_mpc.mpc.wholebody.problem import WBConfig
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.table2.joint_space import DT_BOUNDS_S, JointSpaceProblem, SymbolicKinematics
 from gaitnet_mpc.table2.kd_sqp import JointSQPResult, foot_events, rotation_error
-from gaitnet_mpc.table2.sqp_common import SQPConfig, build_sqp, constraint_violation, run_sqp
+from gaitnet_mpc.table2.sqp_common import SQPConfig, build_sqp, objective_and_violation, run_sqp
 
 #: Step-test groups: CoM and foot centres [m], contact-point forces [N], dt [s].
 GROUPS = ("position", "force", "dt")
@@ -278,12 +278,7 @@ class WBDSQP:
     def evaluate(self, p: JointSpaceProblem, x: np.ndarray) -> tuple[float, float]:
         """(eq. 2 objective, largest constraint/bound violation) of ``p`` at ``x``."""
         entry = self._build(p)
-        args = self._arguments(p, entry)
-        g, obj = entry["g_fun"](x, args["p"])
-        viol = constraint_violation(
-            np.asarray(g).ravel(), args["lbg"], args["ubg"], x, args["lbx"], args["ubx"]
-        )
-        return float(obj), viol
+        return objective_and_violation(entry["g_fun"], self._arguments(p, entry), x)
 
     def solve(self, p: JointSpaceProblem, feasibility_tol: float = 1e-6) -> JointSQPResult:
         """Solve ``p`` cold; converged: the step test stopped it at a point feasible to
