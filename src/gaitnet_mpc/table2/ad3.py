@@ -40,9 +40,9 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.mpc.centroidal_model import skew_batch
 from gaitnet_mpc.mpc.kd_iterate import KDTolerances
 from gaitnet_mpc.mpc.qp import QPProblem, QPWorkspace, make_workspace
-from gaitnet_mpc.table2.cd_problem import NS_CD, CDProblem, CDSolution, cd_cost
+from gaitnet_mpc.table2.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns, cd_cost
 
-NW = NS_CD + 18  # per stage: state 12, f 6, tau 6, p_f 6 (same layout as CD-SQP)
+NW = NW_CD  # per stage: state 12, f 6, tau 6, p_f 6 (same layout as CD-SQP)
 _FREE_TIE_M = 1e3
 SUBPROBLEMS = ("forces", "com", "footholds")
 
@@ -78,16 +78,6 @@ class AD3Result:
     cost: float
 
 
-def _columns(h: int) -> dict[str, np.ndarray]:
-    base = NW * np.arange(h)[:, None]
-    return {
-        "state": base + np.arange(NS_CD),
-        "f": base + NS_CD + np.arange(6),
-        "tau": base + NS_CD + 6 + np.arange(6),
-        "pf": base + NS_CD + 12 + np.arange(6),
-    }
-
-
 class AD3:
     """Alternating-direction solver of the CD problem (module docstring)."""
 
@@ -109,7 +99,7 @@ class AD3:
         (``sum W (z - t)^2``; the CoM carries both the pose term ``m p_c`` and its own)."""
         c = p.config
         h = p.horizon
-        cols = _columns(h)
+        cols = cd_columns(h)
         m = c.mass_kg
         wp, wm = np.asarray(c.w_pose), np.asarray(c.w_momentum)
         diag = np.zeros(NW * h)
@@ -140,7 +130,7 @@ class AD3:
         frozen factor of the torque, everything else stays a column of ``z``."""
         c = p.config
         h, m = p.horizon, c.mass_kg
-        cols = _columns(h)
+        cols = cd_columns(h)
         st = cols["state"]
         rows: list[np.ndarray] = []
         cs: list[np.ndarray] = []
@@ -220,7 +210,7 @@ class AD3:
         """Wrench rows (forces) or tie and separation rows (footholds) over the full
         vector, with their bounds; none for the CoM sub-problem."""
         h = p.horizon
-        cols = _columns(h)
+        cols = cd_columns(h)
         if mode == "forces":
             mw = p.wrench_c.shape[2]
             blocks = []
@@ -271,7 +261,7 @@ class AD3:
     ) -> np.ndarray:  # fmt: skip
         """Solve sub-problem ``mode`` about the full vector ``z``; the new full vector."""
         h = p.horizon
-        cols = _columns(h)
+        cols = cd_columns(h)
         block = {"forces": ("f", "tau"), "com": (), "footholds": ("pf",)}[mode]
         free = np.sort(np.concatenate([cols["state"].ravel(), *(cols[b].ravel() for b in block)]))
         fixed = np.setdiff1d(np.arange(NW * h), free)
@@ -311,7 +301,7 @@ class AD3:
         """
         t0 = time.perf_counter()
         h = p.horizon
-        cols = _columns(h)
+        cols = cd_columns(h)
         cost = self._cost(p)
         lb = np.full(NW * h, -np.inf)
         ub = np.full(NW * h, np.inf)

@@ -41,6 +41,19 @@ from gaitnet_mpc.mpc.kd_layout import KDLayout
 from gaitnet_mpc.mpc.sequential import KDProblem, SequentialKDMPC
 
 NS_CD = 12  # [p_c; l_G; H_ang; k_G]
+NW_CD = NS_CD + 18  # variables per stage of CD-SQP and AD(3): state 12, f 6, tau 6, p_f 6
+
+
+def cd_columns(h: int) -> dict[str, np.ndarray]:
+    """(h, n) indices of each stage's state, force, moment and foothold variables in the
+    stage-wise vector of CD-SQP and AD(3)."""
+    base = NW_CD * np.arange(h)[:, None]
+    return {
+        "state": base + np.arange(NS_CD),
+        "f": base + NS_CD + np.arange(6),
+        "tau": base + NS_CD + 6 + np.arange(6),
+        "pf": base + NS_CD + 12 + np.arange(6),
+    }
 
 
 @dataclass(frozen=True)

@@ -32,10 +32,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gaitnet_mpc.table2.cd_problem import NS_CD, CDProblem, CDSolution
+from gaitnet_mpc.table2.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns
 from gaitnet_mpc.table2.sqp_common import SQPConfig, StepTest, build_sqp, run_sqp
 
-NW = NS_CD + 18  # variables per stage: state 12, f 6, tau 6, p_f 6
+NW = NW_CD  # variables per stage: state 12, f 6, tau 6, p_f 6
 
 
 class CDSQPConfig(SQPConfig):
@@ -75,15 +75,6 @@ class CDSQP:
     def n_variables(horizon: int) -> int:
         """``30 h`` (module docstring)."""
         return NW * horizon
-
-    def _columns(self, h: int) -> dict[str, np.ndarray]:
-        base = NW * np.arange(h)[:, None]
-        return {
-            "state": base + np.arange(NS_CD),
-            "f": base + NS_CD + np.arange(6),
-            "tau": base + NS_CD + 6 + np.arange(6),
-            "pf": base + NS_CD + 12 + np.arange(6),
-        }
 
     def _build(self, p: CDProblem) -> tuple[Any, StepTest]:
         c = p.config
@@ -141,7 +132,7 @@ class CDSQP:
             cost += c.w_force * ca.dot(f, f) + c.w_moment * ca.dot(tau, tau)
             s = s_next
         g = ca.vertcat(*dyn, *wrench, *ties, *seps)
-        cols = self._columns(h)
+        cols = cd_columns(h)
         pos = np.concatenate([cols["state"][:, :3].ravel(), cols["pf"].ravel()])
         f_cols, tau_cols = cols["f"].ravel(), cols["tau"].ravel()
 
@@ -156,7 +147,7 @@ class CDSQP:
     def _arguments(self, p: CDProblem) -> dict[str, Any]:
         """Initial guess (the common ``u^0``), parameters and bounds of one problem."""
         h = p.horizon
-        cols = self._columns(h)
+        cols = cd_columns(h)
         x0 = np.zeros(NW * h)
         x0[cols["state"]] = p.guess_states()
         x0[cols["f"]] = p.guess.f.reshape(h, 6)
