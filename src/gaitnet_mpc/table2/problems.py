@@ -42,6 +42,8 @@ from gaitnet_mpc.state import RobotState
 FORMAT_VERSION = 1
 #: Courses of Table II's recording (``"flat"``, ``"stepping-stones"``).
 TABLE2_COURSES = ("flat", "stepping-stones")
+#: Problems solved in the last this-many seconds before a fall are not recorded [s].
+FALL_MARGIN_S = 0.5
 
 
 # --------------------------------------------------------------------------- freeze
@@ -109,6 +111,10 @@ class RecordingSpec:
             stepping stones, the start platform) [s].
         preview: walk with the multi-step footstep preview (``--preview``), which crosses
             the built-in stones (the one-step preview falls on them).
+        seed: layout seed of a seeded course (None: the built-in layout).
+        stones_only: keep only problems solved while the base is over the course's
+            middle (x from the start of its second patch to the start of its last one:
+            on ``stepping-stones``, the stones), and stop once past it.
     """
 
     course: str = "flat"
@@ -117,6 +123,8 @@ class RecordingSpec:
     dt_s: float = 0.05
     skip_s: float = 0.3
     preview: bool = False
+    seed: int | None = None
+    stones_only: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.duration_s) and self.duration_s > 0.0):
@@ -150,7 +158,10 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
     from gaitnet_mpc.terrain import load_course
 
     robot = load_robot(robot_name)
-    course = load_course(spec.course)
+    course = load_course(spec.course, **({} if spec.seed is None else {"seed": spec.seed}))
+    if spec.stones_only and len(course.patches) < 3:
+        raise ConfigError("stones_only", spec.course, "a course with stones between platforms")
+    x_window_m = (course.patches[1].x_min, course.patches[-1].x_min) if spec.stones_only else (0, 0)
     config = preview_walk_config(KDWalkConfig()) if spec.preview else KDWalkConfig()
     command = Command(vx_mps=spec.vx_mps)
     ctrl = KDWalkController(
@@ -161,14 +172,22 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
     sim = Simulator(robot, course)
     ctrl.reset(sim.state())
     times: list[float] = []
+    x_base_m: list[float] = []
     for _ in range(round(spec.duration_s / sim.config.timestep_s)):
         n_before = len(recorder.problems)
         state = sim.state()
         sim.step(ctrl.compute(state))
         times += [state.t_s] * (len(recorder.problems) - n_before)
-        if sim.fall.fell:
+        x_base_m += [float(state.qpos[0])] * (len(recorder.problems) - n_before)
+        if sim.fall.fell or (spec.stones_only and state.qpos[0] > x_window_m[1]):
             break
-    keep = [i for i, t in enumerate(times) if t >= spec.skip_s]
+    t_end_s = times[-1] - FALL_MARGIN_S if sim.fall.fell and times else np.inf
+    keep = [
+        i
+        for i, (t, x) in enumerate(zip(times, x_base_m, strict=True))
+        if spec.skip_s <= t < t_end_s
+        and (not spec.stones_only or x_window_m[0] <= x <= x_window_m[1])
+    ]
     return Recording(
         [recorder.problems[i] for i in keep],
         [recorder.results[i] for i in keep],
@@ -357,6 +376,14 @@ def iter_problems(path: Path | str, limit: int | None = None) -> Iterator[Record
         yield RecordedProblem(_rebuild(arrays), str(arrays["course"]))
 
 
+def problem_count(path: Path | str) -> int:
+    """How many problems a file written by :func:`save_problems` holds."""
+    with np.load(Path(path), allow_pickle=False) as data:
+        if "format" not in data.files or int(data["format"]) != FORMAT_VERSION:
+            raise ConfigError("problems file", str(path), f"format {FORMAT_VERSION} (.npz)")
+        return int(data["count"])
+
+
 def load_problems(path: Path | str, limit: int | None = None) -> list[RecordedProblem]:
     """All (or the first ``limit``) problems of a file written by :func:`save_problems`."""
     return list(iter_problems(path, limit))
@@ -373,6 +400,7 @@ __all__ = [
     "iter_problems",
     "kd_solver",
     "load_problems",
+    "problem_count",
     "record_problems",
     "record_run",
     "save_problems",

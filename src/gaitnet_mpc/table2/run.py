@@ -26,7 +26,9 @@ through the exact dynamics), reported as the median ratio to CD-SQP's cost.
 
 from __future__ import annotations
 
+import json
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,7 +46,7 @@ from gaitnet_mpc.table2.joint_space import (
     max_dt_variables,
 )
 from gaitnet_mpc.table2.kd_sqp import ExplicitKDSQP, KDSQPConfig
-from gaitnet_mpc.table2.problems import kd_solver, load_problems
+from gaitnet_mpc.table2.problems import RecordedProblem, kd_solver, load_problems
 from gaitnet_mpc.table2.sqp_common import SQPConfig
 from gaitnet_mpc.table2.wbd_sqp import WBDSQP
 
@@ -60,6 +62,11 @@ PAPER_TABLE2: dict[str, tuple[str, float, float]] = {
     "AD(3)": ("27h-15, 21h-9, 16h-4", 2.58, 27.5),
     "proposed (implicit KD)": ("33h-21", 0.76, 17.1),
 }
+#: Solves per simulated second of the ``kd`` walk (a replan every 20 ms, plus the step
+#: starts): sizes the flat recording.
+SOLVES_PER_S = 50.0
+#: Seeded stepping-stone layouts tried at most when recording the stones half.
+MAX_STONE_SEEDS = 100
 #: Our variable counts (formula in h) per method row.
 OUR_VARIABLES: dict[str, str] = {
     "WBD-SQP": "103h+n_dt",
@@ -120,6 +127,7 @@ class MethodRow:
 class Table2Result:
     rows: list[MethodRow]
     n_problems: int
+    courses: dict[str, int]
     horizon: int
     machine: str
 
@@ -130,61 +138,38 @@ def run_table2(
     progress: Callable[[int, int], None] | None = None,
     with_osqp: bool = False,
     with_joint_space: bool = True,
+    records_path: Path | str | None = None,
 ) -> Table2Result:
     """Solve the first ``n_problems`` recorded problems with every method (module
     docstring) and return the table's rows; ``with_joint_space=False`` skips the slow
     explicit KD-SQP and WBD-SQP columns (their NLPs take 2-20 s to build per contact
-    pattern)."""
+    pattern).
+
+    With ``records_path`` (a JSON-lines file), each problem's results are appended to it
+    as soon as the problem is solved, and problems already there (from an interrupted
+    run with the same problems and columns) are not solved again.
+    """
     recorded = load_problems(problems_path, n_problems)
     if not recorded:
         raise ConfigError("problems", str(problems_path), "a file with at least one problem")
-    kd = kd_solver()
-    cd_builder = kd_solver()
-    sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
-    sqp_osqp = CDSQP(CDSQPConfig(qpsol="osqp")) if with_osqp else None
-    ad3 = AD3()
     names = ["proposed (implicit KD)", "CD-SQP", "AD(3)"]
     names += ["CD-SQP (OSQP)"] if with_osqp else []
-    kd_sqp: ExplicitKDSQP | None = None
-    wbd_sqp: WBDSQP | None = None
-    if with_joint_space:
-        kin = SymbolicKinematics(kd.robot)
-        kd_sqp = ExplicitKDSQP(kin, KDSQPConfig(sqp=JOINT_SQP))
-        wbd_sqp = WBDSQP(kin, sqp=JOINT_SQP)
-        names += ["explicit KD-SQP", "WBD-SQP"]
-    stats: dict[str, MethodStats] = {name: MethodStats() for name in names}
+    names += ["explicit KD-SQP", "WBD-SQP"] if with_joint_space else []
+    done = _read_records(records_path, names) if records_path is not None else {}
+    solve = _ProblemSolver(with_osqp, with_joint_space)
     horizon = 0
     for n, rec in enumerate(recorded):
-        cd = centroidal_problem(cd_builder, rec.problem)
-        horizon = cd.horizon
-        sqp.prepare(cd)
-        res = kd.solve(rec.problem)
-        it = res.iterate
-        plan = CDSolution(rollout(cd, it.f, it.tau, it.p_foot), it.f, it.tau, it.p_foot)
-        stats["proposed (implicit KD)"].add(
-            res.solve_time_s, res.n_qps, res.converged, cd_cost(cd, plan)
-        )
-        r_sqp = sqp.solve(cd)
-        stats["CD-SQP"].add(r_sqp.solve_time_s, r_sqp.n_qps, r_sqp.converged, r_sqp.cost)
-        if sqp_osqp is not None:
-            sqp_osqp.prepare(cd)
-            r_o = sqp_osqp.solve(cd)
-            stats["CD-SQP (OSQP)"].add(r_o.solve_time_s, r_o.n_qps, r_o.converged, r_o.cost)
-        r_ad = ad3.solve(cd)
-        stats["AD(3)"].add(r_ad.solve_time_s, r_ad.n_qps, r_ad.converged, r_ad.cost)
-        if kd_sqp is not None and wbd_sqp is not None:
-            sps = int(rec.problem.timing.stages_per_step)
-            jp = joint_space_problem(cd_builder, rec.problem, max_dt_variables(cd.horizon, sps), cd)
-            kd_sqp.prepare(jp)
-            wbd_sqp.prepare(jp)
-            r_kd = kd_sqp.solve(jp)
-            stats["explicit KD-SQP"].add(
-                r_kd.solve_time_s, r_kd.n_qps, r_kd.converged, r_kd.eq18_cost
-            )
-            r_wb = wbd_sqp.solve(jp)
-            stats["WBD-SQP"].add(r_wb.solve_time_s, r_wb.n_qps, r_wb.converged, r_wb.eq18_cost)
+        if n not in done:
+            done[n] = solve(rec)
+            if records_path is not None:
+                _append_record(records_path, n, rec.course, done[n])
+        horizon = int(rec.problem.timing.dts_s.size)
         if progress is not None:
             progress(n + 1, len(recorded))
+    stats: dict[str, MethodStats] = {name: MethodStats() for name in names}
+    for n in range(len(recorded)):
+        for name in names:
+            stats[name].add(*done[n][name])
     base_time = float(np.mean(stats["CD-SQP"].times_s))
     base_cost = np.asarray(stats["CD-SQP"].costs)
     rows = []
@@ -210,9 +195,101 @@ def run_table2(
                 variables=OUR_VARIABLES[name],
             )
         )
+    courses: dict[str, int] = {}
+    for rec in recorded:
+        courses[rec.course] = courses.get(rec.course, 0) + 1
     return Table2Result(
-        rows, len(recorded), horizon, machine_info(("numpy", "casadi", "piqp", "mujoco", "pin"))
+        rows,
+        len(recorded),
+        courses,
+        horizon,
+        machine_info(("numpy", "casadi", "piqp", "mujoco", "pin")),
     )
+
+
+#: One method's result on one problem: (solve time [s], QPs, converged, eq. 18 cost).
+Record = tuple[float, int, bool, float]
+
+
+class _ProblemSolver:
+    """Every method, built once, solving one recorded problem (methods interleaved)."""
+
+    def __init__(self, with_osqp: bool, with_joint_space: bool) -> None:
+        self.kd = kd_solver()
+        self.cd_builder = kd_solver()
+        self.sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
+        self.sqp_osqp = CDSQP(CDSQPConfig(qpsol="osqp")) if with_osqp else None
+        self.ad3 = AD3()
+        self.kd_sqp: ExplicitKDSQP | None = None
+        self.wbd_sqp: WBDSQP | None = None
+        if with_joint_space:
+            kin = SymbolicKinematics(self.kd.robot)
+            self.kd_sqp = ExplicitKDSQP(kin, KDSQPConfig(sqp=JOINT_SQP))
+            self.wbd_sqp = WBDSQP(kin, sqp=JOINT_SQP)
+
+    def __call__(self, rec: RecordedProblem) -> dict[str, Record]:
+        out: dict[str, Record] = {}
+        cd = centroidal_problem(self.cd_builder, rec.problem)
+        self.sqp.prepare(cd)
+        res = self.kd.solve(rec.problem)
+        it = res.iterate
+        plan = CDSolution(rollout(cd, it.f, it.tau, it.p_foot), it.f, it.tau, it.p_foot)
+        out["proposed (implicit KD)"] = (
+            res.solve_time_s,
+            res.n_qps,
+            res.converged,
+            cd_cost(cd, plan),
+        )
+        r = self.sqp.solve(cd)
+        out["CD-SQP"] = (r.solve_time_s, r.n_qps, r.converged, r.cost)
+        if self.sqp_osqp is not None:
+            self.sqp_osqp.prepare(cd)
+            r = self.sqp_osqp.solve(cd)
+            out["CD-SQP (OSQP)"] = (r.solve_time_s, r.n_qps, r.converged, r.cost)
+        r_ad = self.ad3.solve(cd)
+        out["AD(3)"] = (r_ad.solve_time_s, r_ad.n_qps, r_ad.converged, r_ad.cost)
+        if self.kd_sqp is not None and self.wbd_sqp is not None:
+            sps = int(rec.problem.timing.stages_per_step)
+            jp = joint_space_problem(
+                self.cd_builder, rec.problem, max_dt_variables(cd.horizon, sps), cd
+            )
+            self.kd_sqp.prepare(jp)
+            self.wbd_sqp.prepare(jp)
+            r_kd = self.kd_sqp.solve(jp)
+            out["explicit KD-SQP"] = (r_kd.solve_time_s, r_kd.n_qps, r_kd.converged, r_kd.eq18_cost)
+            r_wb = self.wbd_sqp.solve(jp)
+            out["WBD-SQP"] = (r_wb.solve_time_s, r_wb.n_qps, r_wb.converged, r_wb.eq18_cost)
+        return out
+
+
+def _read_records(path: Path | str, names: list[str]) -> dict[int, dict[str, Record]]:
+    """Problem index -> results, from a records file (missing file: none); a record
+    without every column of ``names`` is ignored (solved again)."""
+    path = Path(path)
+    if not path.exists():
+        return {}
+    done: dict[int, dict[str, Record]] = {}
+    for line in path.read_text().splitlines():
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:  # a line cut by an interruption
+            continue
+        methods = row.get("methods", {})
+        if all(name in methods for name in names):
+            done[int(row["problem"])] = {
+                name: (float(t), int(q), bool(c), float(cost))
+                for name, (t, q, c, cost) in methods.items()
+            }
+    return done
+
+
+def _append_record(path: Path | str, n: int, course: str, results: dict[str, Record]) -> None:
+    """Append one problem's results as one JSON line, flushed to disk."""
+    line = json.dumps({"problem": n, "course": course, "methods": results})
+    with open(path, "a", encoding="utf-8") as fh:
+        fh.write(line + "\n")
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def _median_ratio(costs: np.ndarray, base: np.ndarray) -> float:
@@ -250,7 +327,13 @@ def table2_markdown(result: Table2Result) -> str:
         )
     lines += [
         "",
-        "Same problems (recorded from the `kd` controller in closed loop), cold from the "
+        "Problems: "
+        + ", ".join(f"{n} {course}" for course, n in result.courses.items())
+        + " (recorded from the `kd` controller in closed loop at 0.75 m/s, fixed dt "
+        "0.05 s; the stones with the footstep preview, on the built-in layout and then "
+        "seeded ones, kept while the base is over the stones).",
+        "",
+        "Same problems, cold from the "
         "same u^0, stopped by the Table X step test; CD-SQP = CasADi sqpmethod + qpOASES "
         "(sparse), exact Hessian. Proposed = Algorithm 1 with PIQP, whose references are "
         "re-made by IK each iteration (line 9); its cost column scores its plan on the CD "
@@ -268,47 +351,81 @@ def table2_markdown(result: Table2Result) -> str:
     return "\n".join(lines)
 
 
+def record_table2_problems(path: Path | str, n_problems: int) -> Path:
+    """Record ``n_problems`` problems into ``path`` (Table II's inputs), alternating the
+    courses: half on ``flat`` (every solve after the start-up transient of one walk),
+    half on the stones, with the footstep preview: the built-in ``stepping-stones``
+    first, then seeded layouts (seeds 0, 1, ...) until enough, each kept only while the
+    base is over the stones (:class:`RecordingSpec`, ``stones_only``)."""
+    from gaitnet_mpc.mpc.sequential import KDProblem
+    from gaitnet_mpc.table2.problems import RecordingSpec, record_problems, save_problems
+
+    n_stones = n_problems // 2
+    n_flat = n_problems - n_stones
+    flat = record_problems(RecordingSpec("flat", duration_s=0.3 + n_flat / SOLVES_PER_S + 1.0))[
+        :n_flat
+    ]
+    stones: list[KDProblem] = []
+    seeds: list[int | None] = [None, *range(MAX_STONE_SEEDS)]
+    for seed in seeds:
+        if len(stones) >= n_stones:
+            break
+        spec = RecordingSpec(
+            "stepping-stones",
+            duration_s=30.0,
+            skip_s=0.0,
+            preview=True,
+            seed=seed,
+            stones_only=True,
+        )
+        stones += record_problems(spec)
+    stones = stones[:n_stones]
+    if len(flat) < n_flat or len(stones) < n_stones:
+        raise RuntimeError(
+            f"recorded {len(flat)} flat and {len(stones)} stepping-stone problems, "
+            f"wanted {n_flat} and {n_stones}"
+        )
+    problems, courses = [], []
+    for i in range(n_flat):  # alternate the courses
+        for got, course in ((flat, "flat"), (stones, "stepping-stones")):
+            if i < len(got):
+                problems.append(got[i])
+                courses.append(course)
+    return save_problems(path, problems, courses)
+
+
 def reproduce_table2(
     out_dir: Path | str,
     n_problems: int = 40,
-    seconds_per_course: float = 3.0,
-    every: int = 2,
     progress: Callable[[int, int], None] | None = None,
     with_joint_space: bool = True,
 ) -> Path:
-    """Record problems into ``out_dir/problems.npz`` unless present (every ``every``-th
-    problem of ``seconds_per_course`` of walking on each of :data:`TABLE2_COURSES`, on
-    the stones after the start platform and with the footstep preview; courses
-    alternating), run :func:`run_table2` on the first ``n_problems`` and write
-    ``out_dir/table2.md``; returns that path. ``with_joint_space=False`` skips explicit
-    KD-SQP and WBD-SQP."""
-    from gaitnet_mpc.table2.problems import (
-        TABLE2_COURSES,
-        RecordingSpec,
-        record_problems,
-        save_problems,
-    )
+    """Table II on ``n_problems`` problems: record them into ``out_dir/problems.npz``
+    (:func:`record_table2_problems`) unless a file with at least that many is there,
+    solve them with :func:`run_table2` (resumable through ``out_dir/records.jsonl``:
+    run it again after an interruption) and write ``out_dir/table2.md``; returns that
+    path. ``with_joint_space=False`` skips explicit KD-SQP and WBD-SQP."""
+    from gaitnet_mpc.table2.problems import problem_count
 
     out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     path = out / "problems.npz"
-    if not path.exists():
-        specs = {  # on the stones: from the first stone (0.88 m, ~1.4 s) on, with the preview
-            "flat": RecordingSpec("flat", duration_s=seconds_per_course),
-            "stepping-stones": RecordingSpec(
-                "stepping-stones", duration_s=1.4 + seconds_per_course, skip_s=1.4, preview=True
-            ),
-        }
-        per_course = [record_problems(specs[c])[::every] for c in TABLE2_COURSES]
-        problems, courses = [], []
-        for i in range(max(len(x) for x in per_course)):  # alternate the courses
-            for course, got in zip(TABLE2_COURSES, per_course, strict=True):
-                if i < len(got):
-                    problems.append(got[i])
-                    courses.append(course)
-        save_problems(path, problems, courses)
-    result = run_table2(path, n_problems, progress=progress, with_joint_space=with_joint_space)
+    if not path.exists() or problem_count(path) < n_problems:
+        if path.exists():  # records of the old, smaller set no longer apply
+            (out / "records.jsonl").unlink(missing_ok=True)
+        tmp = record_table2_problems(out / "problems.tmp.npz", n_problems)
+        os.replace(tmp, path)
+    result = run_table2(
+        path,
+        n_problems,
+        progress=progress,
+        with_joint_space=with_joint_space,
+        records_path=out / "records.jsonl",
+    )
     report = out / "table2.md"
-    report.write_text(table2_markdown(result) + "\n")
+    tmp_report = report.with_suffix(".md.tmp")
+    tmp_report.write_text(table2_markdown(result) + "\n")
+    os.replace(tmp_report, report)
     return report
 
 
@@ -318,6 +435,7 @@ __all__ = [
     "PAPER_TABLE2",
     "MethodRow",
     "Table2Result",
+    "record_table2_problems",
     "reproduce_table2",
     "run_table2",
     "table2_markdown",
