@@ -329,6 +329,42 @@ def _add_collect_parsers(sub: Any) -> None:
         action="store_true",
         help="table2: skip the explicit KD-SQP and WBD-SQP columns (the slow ones)",
     )
+    b = sub.add_parser(
+        "bench",
+        help="time the closed loop: solves, low-level tick, real-time factor, memory",
+        description="Walk each case (a controller with --set overrides) on the same course, "
+        "--rounds times in fresh processes, interleaved; print and write perf.md: solve-time "
+        "distribution, QPs per solve, low-level tick, real-time factor, a profile of the "
+        "first case and (with --memory-seconds) the RSS over one long episode.",
+    )
+    b.add_argument(
+        "--case",
+        action="append",
+        default=None,
+        metavar="LABEL=CONTROLLER[:KEY=VALUE,...]",
+        help="a case to time (repeatable); default: kd and gaitnet, each as shipped and "
+        "with RTI replans (replan_j_max=1)",
+    )
+    b.add_argument("--course", default="flat", help="built-in course (default: %(default)s)")
+    b.add_argument("--vx", type=float, default=0.75, help="m/s (default: %(default)s)")
+    b.add_argument(
+        "--seconds", type=float, default=4.0, help="simulated per episode (default: %(default)s)"
+    )
+    b.add_argument("--rounds", type=int, default=3, help="rounds per case (default: %(default)s)")
+    b.add_argument(
+        "--memory-seconds",
+        type=float,
+        default=0.0,
+        help="one episode this long of the first case, RSS at start and end (0: skip; "
+        "default: %(default)s)",
+    )
+    b.add_argument("--no-profile", action="store_true", help="skip the cProfile breakdown")
+    b.add_argument(
+        "--out",
+        type=Path,
+        default=Path("runs/perf.md"),
+        help="report file (default: %(default)s; benchmarks/results/perf.md for the record)",
+    )
     ds = sub.add_parser("dataset", help="data-set tools")
     ds_sub = ds.add_subparsers(dest="dataset_cmd", required=True)
     check = ds_sub.add_parser("check", help="validate a data-set folder")
@@ -398,7 +434,15 @@ def _reproduce(args: argparse.Namespace) -> int:
 
         if args.problems < 1:
             raise ConfigError("--problems", args.problems, "an integer >= 1")
-        report = reproduce_table2(out, args.problems, with_joint_space=not args.no_joint_space)
+        report = reproduce_table2(
+            out,
+            args.problems,
+            progress=lambda n, total: print(
+                f"\rsolved {n}/{total} problems", end="", file=sys.stderr, flush=True
+            ),
+            with_joint_space=not args.no_joint_space,
+        )
+        print(file=sys.stderr)
         print(report.read_text(), end="")
     else:
         from gaitnet_mpc.gaitnet.table1 import reproduce_table1
@@ -406,6 +450,72 @@ def _reproduce(args: argparse.Namespace) -> int:
         reproduce_table1(args.data, out)
         print((out / "table1.md").read_text(), end="")
     print(f"results in {out}/")
+    return 0
+
+
+def _bench_case(text: str) -> Any:
+    """``LABEL=CONTROLLER[:KEY=VALUE,...]`` -> :class:`BenchCase`."""
+    from gaitnet_mpc.bench import BenchCase
+
+    label, sep, rest = text.partition("=")
+    controller, _, sets = rest.partition(":")
+    if not sep or not label or not controller:
+        raise ConfigError(
+            "--case", text, "LABEL=CONTROLLER[:KEY=VALUE,...], e.g. rti=kd:replan_j_max=1"
+        )
+    return BenchCase(label, controller, tuple(x for x in sets.split(",") if x))
+
+
+def _bench(args: argparse.Namespace) -> int:
+    import shlex
+
+    from gaitnet_mpc.bench import (
+        DEFAULT_CASES,
+        EpisodeSpec,
+        build_case,
+        perf_markdown,
+        profiled_episode,
+        run_bench,
+        timed_episode,
+    )
+    from gaitnet_mpc.results.io import write_atomic
+
+    cases = [_bench_case(c) for c in args.case] if args.case else list(DEFAULT_CASES)
+    spec = EpisodeSpec(args.course, args.vx, args.seconds)
+    if not (math.isfinite(args.memory_seconds) and args.memory_seconds >= 0.0):
+        raise ConfigError("--memory-seconds", args.memory_seconds, "a finite time >= 0 s")
+    for case in cases:  # bad controller names or overrides fail here, before any timing
+        build_case(case, spec)
+
+    def say(text: str) -> None:
+        print(text, file=sys.stderr, flush=True)
+
+    results = run_bench(cases, spec, args.rounds, progress=say)
+    parts = None
+    if not args.no_profile:
+        say(f"profiling {cases[0].label}")
+        parts = profiled_episode(cases[0], spec)
+    memory = None
+    if args.memory_seconds > 0.0:
+        say(f"memory: {cases[0].label}, {args.memory_seconds:g} s simulated")
+        memory = timed_episode(
+            cases[0],
+            EpisodeSpec(args.course, args.vx, args.memory_seconds),
+            on_second=lambda t: say(f"  {t:.0f} s") if round(t) % 60 == 0 else None,
+        )
+    report = perf_markdown(
+        results,
+        spec,
+        args.rounds,
+        parts,
+        cases[0].label,
+        memory,
+        cases[0].label,
+        shlex.join(["gaitnet-mpc", *args.argv]),
+    )
+    write_atomic(args.out, report)
+    print(report)
+    print(f"written to {args.out}")
     return 0
 
 
@@ -758,6 +868,8 @@ def main(argv: list[str] | None = None) -> int:
             return _train(args)
         if args.cmd == "reproduce":
             return _reproduce(args)
+        if args.cmd == "bench":
+            return _bench(args)
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return 2

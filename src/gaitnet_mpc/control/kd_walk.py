@@ -434,8 +434,8 @@ class KDWalkController(WalkingBase):
         t = sched.time_in_step_s
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         assert self.swing is not None  # made by _start_step, which the first tick runs
-        p_swing = self.swing.position(t)
+        p_swing, v_swing, a_swing = self.swing.sample(t)
         if yaw is not None and self.config.keep_feet_apart:
             p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)
-        target = {swing: (p_swing, self.swing.velocity(t), self.swing.acceleration(t))}
+        target = {swing: (p_swing, v_swing, a_swing)}
         return self.low.torques(state, wrench, target, yaw)

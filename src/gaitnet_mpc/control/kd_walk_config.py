@@ -67,6 +67,9 @@ class KDWalkConfig:
     """Settings of the kino-dynamic walking controller."""
 
     replan_period_s: float = 0.02
+    # QPs at most per replan within a step (a step start always runs up to
+    # ``sequential.j_max``). 1: the real-time-iteration replan (one QP from the new state,
+    # benchmarks/results/replan_outcomes.md and perf.md measure what it costs and saves).
     replan_j_max: int = 50
     max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
     sequential: SequentialConfig = field(
@@ -112,6 +115,9 @@ class KDWalkConfig:
     keep_feet_apart: bool = True
 
     def __post_init__(self) -> None:
+        j = self.replan_j_max
+        if isinstance(j, bool) or not isinstance(j, int) or j < 1:
+            raise ConfigError("replan_j_max", j, "an integer >= 1 (1: one QP per replan)")
         if self.lateral_reference not in ("line", "lip"):
             raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
         tau = self.lateral_return_time_s

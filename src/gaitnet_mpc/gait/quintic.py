@@ -34,10 +34,15 @@ def quintic_coeffs(
     return np.stack([p0, v0, 0.5 * a0, c3, c4, c5])  # (6, d)
 
 
+#: Derivative ``d`` of the monomials ``s^k`` (k = 0..5) is ``_FACTOR[d] * s**_POWER[d]``
+#: (the factor is 0 where the monomial's derivative vanishes).
+_K = np.arange(6)
+_FACTOR = (np.ones(6), _K.astype(float), (_K * (_K - 1)).astype(float))
+_POWER = (_K, np.maximum(_K - 1, 0), np.maximum(_K - 2, 0))
+
+
 class PiecewiseQuintic:
     """Piecewise quintic in d dimensions: breaks (n+1,), coefficients (n, 6, d)."""
-
-    _K = np.arange(6)
 
     def __init__(self, breaks: np.ndarray, coeffs: np.ndarray) -> None:
         self.breaks = breaks  # (n+1,)
@@ -49,17 +54,19 @@ class PiecewiseQuintic:
 
     def eval(self, t: np.ndarray, deriv: int = 0) -> np.ndarray:
         """(N, d) value (deriv 0), velocity (1) or acceleration (2) at times t (N,)."""
+        return self.eval_derivs(t, (deriv,))[0]
+
+    def eval_derivs(self, t: np.ndarray, derivs: tuple[int, ...]) -> list[np.ndarray]:
+        """:meth:`eval` for each of ``derivs`` at times t (N,), locating the pieces once."""
         n = len(self.breaks) - 1
-        idx = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, n - 1)  # (N,)
+        idx = np.searchsorted(self.breaks, t, side="right") - 1  # (N,)
+        idx = np.minimum(np.maximum(idx, 0), n - 1)
         s = (t - self.breaks[idx])[:, None]  # (N, 1)
-        k = self._K
-        if deriv == 0:
-            w = s**k
-        elif deriv == 1:
-            w = np.where(k >= 1, k * s ** np.maximum(k - 1, 0), 0.0)
-        else:
-            w = np.where(k >= 2, k * (k - 1) * s ** np.maximum(k - 2, 0), 0.0)
-        return np.einsum("nk,nkd->nd", w, self.coeffs[idx])  # (N, 6)·(N, 6, d)
+        coeffs = self.coeffs[idx]
+        return [
+            np.einsum("nk,nkd->nd", _FACTOR[d] * s ** _POWER[d], coeffs)  # (N, 6)·(N, 6, d)
+            for d in derivs
+        ]
 
     def truncated(self, t_cut: float) -> PiecewiseQuintic:
         """The pieces before ``t_cut`` (the last one ends at ``t_cut``)."""

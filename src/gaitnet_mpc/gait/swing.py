@@ -271,6 +271,15 @@ class SwingTrajectory:
         out = np.concatenate([self._xy.eval(tc, deriv), self._z.eval(tc, deriv)], axis=1)
         return out[0] if t_arr.ndim == 0 else out.reshape((*t_arr.shape, 3))
 
+    def sample(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(position, velocity, acceleration) (3,) each at one time [m, m/s, m/s²], as
+        :meth:`position`, :meth:`velocity` and :meth:`acceleration` give them."""
+        tc = np.array([min(max(float(t_s), 0.0), self._T)])
+        xy = self._xy.eval_derivs(tc, (0, 1, 2))
+        z = self._z.eval_derivs(tc, (0, 1, 2))
+        p, v, a = (np.concatenate([h[0], vz[0]]) for h, vz in zip(xy, z, strict=True))
+        return p, v, a
+
     def position(self, t_s: ArrayLike) -> np.ndarray:
         """Foot position [m]: (3,) for scalar ``t_s``, (N, 3) for (N,) times."""
         return self._eval(t_s, 0)

@@ -213,6 +213,8 @@ class Simulator:
             m.geom(name).id: f for f in FEET for name in self.robot.spec.foot_geoms[f]
         }
         self._foot_sites = {f: m.site(self.robot.spec.foot_sites[f]).id for f in FEET}
+        # _contacts() of the current data; None once mj_step / mj_forward changed it
+        self._contact_cache: tuple[dict[str, np.ndarray], set[str], bool] | None = None
         #: geom id -> whether it belongs to the robot (its body is not the world body)
         self._robot_geom = m.geom_bodyid != 0
         self._body_names = [m.body(b).name for b in range(m.nbody)]
@@ -244,6 +246,7 @@ class Simulator:
             self.robot.standing_qpos(x0, y0, ground) if qpos is None else np.asarray(qpos)
         )
         mujoco.mj_forward(self.model, self.data)
+        self._contact_cache = None
         self._ground0_m = ground
         self._com_height0_m = float(self.data.subtree_com[self._trunk_id, 2] - ground)
         self.footholds.clear()
@@ -291,6 +294,7 @@ class Simulator:
         self.data.xfrc_applied[self._trunk_id, :3] = force
         warnings0 = self.data.warning.number[self._warn_ids].copy()
         mujoco.mj_step(self.model, self.data)
+        self._contact_cache = None
         t_end = t + self.model.opt.timestep
         reason = self._divergence(t, warnings0)
         if reason is None:
@@ -348,6 +352,7 @@ class Simulator:
         d.time = t_s
         d.xfrc_applied[:] = 0.0
         mujoco.mj_forward(self.model, d)
+        self._contact_cache = None
         self.self_contact = self._self_contacts() is not None
 
     # ---------------------------------------------------------------- read-out
@@ -377,8 +382,16 @@ class Simulator:
             f_world = sign * frame.T @ c6[:3]
             r = con.pos - d.site_xpos[self._foot_sites[foot]]
             wrench[foot][:3] += f_world
-            wrench[foot][3:] += np.cross(r, f_world)
+            wrench[foot][3:] += _cross3(r, f_world)
         return wrench, touching, other
+
+    def _contacts_now(self) -> tuple[dict[str, np.ndarray], set[str], bool]:
+        """:meth:`_contacts` of the current MuJoCo data, computed once per step (the
+        step's fall checks and the next :meth:`state` read the same contacts)."""
+        if self._contact_cache is None:
+            self._contact_cache = self._contacts()
+        wrench, touching, other = self._contact_cache
+        return {f: w.copy() for f, w in wrench.items()}, set(touching), other
 
     def _self_contacts(self) -> np.ndarray | None:
         """Indices into ``data.contact`` of active contacts between two robot geoms."""
@@ -411,7 +424,7 @@ class Simulator:
         d = self.data
         t = self.time_s
         self._update_self_collisions()
-        _, touching, other = self._contacts()
+        _, touching, other = self._contacts_now()
         for foot in FEET:
             now = foot in touching
             if now and not self._in_contact[foot]:
@@ -452,7 +465,7 @@ class Simulator:
         m, d, r = self.model, self.data, self.robot
         mujoco.mj_subtreeVel(m, d)
         root = self._trunk_id
-        wrench, touching, _ = self._contacts()
+        wrench, touching, _ = self._contacts_now()
         p_base, rot = r.base_pose(d.qpos)
         if r.spec.planar:
             v_base = np.array([d.qvel[0], 0.0, d.qvel[1]])
@@ -479,3 +492,10 @@ class Simulator:
             foot_contact={f: f in touching for f in FEET},
             foot_wrench_world=wrench,
         )
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two 3-vectors, without its general-shape overhead (same result)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
