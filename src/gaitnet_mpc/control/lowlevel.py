@@ -127,10 +127,7 @@ class LowLevelController:
             sol = whole_body_ik(
                 r, base_next, np.stack([rot] * n), targets, yaw, geometries=self.geometries
             )
-            mass = None
-            if ff > 0.0:
-                upper = pin.crba(model, data, q)  # the upper triangle is filled
-                mass = np.triu(upper) + np.triu(upper, 1).T
+            upper = pin.crba(model, data, q) if ff > 0.0 else None  # upper triangle filled
             for foot in feet:
                 idx = r.leg_joint_index[foot]
                 q_des = sol.joint_pos_rad[0, idx]
@@ -140,11 +137,12 @@ class LowLevelController:
                     + c.swing_kd_nms_per_rad * (qd_des - qdj[idx])
                     + gravity[idx]
                 )
-                if mass is not None:
+                if upper is not None:
                     q_ik = sol.joint_pos_rad[:, idx]
                     qdd_des = (q_ik[2] - 2.0 * q_ik[1] + q_ik[0]) / dt**2
-                    v_idx = idx + r.n_root_dofs
-                    tau[idx] += ff * mass[np.ix_(v_idx, v_idx)] @ qdd_des
+                    v_idx = idx + r.n_root_dofs  # ascending: the block's upper triangle is M's
+                    block = upper[np.ix_(v_idx, v_idx)]
+                    tau[idx] += ff * (np.triu(block) + np.triu(block, 1).T) @ qdd_des
         if self.arm_index.size:
             q_arm = self.q_nominal.copy()
             for side, other in (("left", "right"), ("right", "left")):

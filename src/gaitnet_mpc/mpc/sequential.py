@@ -373,7 +373,8 @@ class SequentialKDMPC:
         step: KDStep | None = None
         converged = False
         n_qps = 0
-        for _ in range(problem.j_max or cfg.j_max):
+        j_max = problem.j_max or cfg.j_max
+        for _ in range(j_max):
             sub = self.subproblem
             inputs = sub.inputs(
                 iterate,
@@ -405,6 +406,8 @@ class SequentialKDMPC:
                     r = self._references(problem, timing, touchdowns)
             if step.converged(cfg.tolerances) and not retimed:
                 converged = True
+                break
+            if n_qps == j_max:  # no QP follows: line 9 would re-make references unused
                 break
             ref = update_reference(robot, r.ref, iterate.p_foot, iterate.p_com, dts)
             r = replace(r, ref=ref)
