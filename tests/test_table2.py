@@ -103,6 +103,22 @@ def test_cd_sqp_converges_to_a_feasible_plan(cd_problem: CDProblem) -> None:
     assert res.cost == pytest.approx(cd_cost(cd_problem, res.solution))
 
 
+def test_cd_sqp_carries_no_solver_state_between_problems(saved: Path) -> None:
+    """Each problem is solved cold: a problem solved again after a diverging one takes
+    the same QPs and gives the same plan (one reused ``nlpsol`` once returned the same
+    1-QP plan, eq. 18 cost 24.6, for every problem after a diverged one)."""
+    from dataclasses import replace
+
+    first = centroidal_problem(kd_solver(), load_problems(saved, 1)[0].problem)
+    diverging = replace(first, s0=first.s0 * 1e3)  # momenta and CoM far off
+    sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
+    a = sqp.solve(first)
+    assert sqp.solve(diverging).cost > 1e6 * a.cost
+    b = sqp.solve(first)
+    assert b.n_qps == a.n_qps
+    assert b.cost == pytest.approx(a.cost, rel=1e-9)
+
+
 def test_ad3_converges_near_the_proposed_cost(saved: Path) -> None:
     """AD(3) converges (within its 50 rounds) on one of the first recorded problems
     (it converges on about 20 % of them: its rate is linear), to a feasible plan whose
