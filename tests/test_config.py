@@ -42,9 +42,11 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
 
 @pytest.mark.parametrize("planar", [False, True])
 def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> None:
-    assert preset_names("kd") == ["default", "paper"]
+    assert preset_names("kd") == ["default", "paper", "realtime"]
     assert preset_names("srbm") == ["default"]
     assert load_preset(KDWalkConfig, "kd", "default", planar) == KDWalkConfig()
+    realtime = load_preset(KDWalkConfig, "kd", "realtime", planar)
+    assert realtime == replace(KDWalkConfig(), replan_j_max=1)
     assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config_before(planar)
     assert load_preset(SRBMWalkConfig, "srbm", "default", planar) == SRBMWalkConfig()
 

@@ -68,9 +68,9 @@ class BenchCase:
 #: per replan within a step, full convergence at step starts), for kd and gaitnet.
 DEFAULT_CASES = (
     BenchCase("kd"),
-    BenchCase("kd, RTI replans", "kd", ("replan_j_max=1",)),
+    BenchCase("kd --preset realtime", "kd", ("replan_j_max=1",)),
     BenchCase("gaitnet"),
-    BenchCase("gaitnet, RTI replans", "gaitnet", ("replan_j_max=1",)),
+    BenchCase("gaitnet --preset realtime", "gaitnet", ("replan_j_max=1",)),
 )
 
 
