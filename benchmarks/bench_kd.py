@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import cProfile
-import fnmatch
 import json
 import os
 import pstats
@@ -32,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitnet_mpc.bench import profile_parts
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController
 from gaitnet_mpc.control.terrain_view import TerrainView
@@ -50,21 +50,6 @@ SOLVER_FILES = (
     "src/gaitnet_mpc/kinematics/*.py",
     "src/gaitnet_mpc/gait/timing.py",
 )
-#: Profile rows: label -> (file name, function name pattern[, caller's file name]) of the
-#: profiled function; with a caller, only the time of calls made from that file counts.
-PARTS: dict[str, tuple[str, ...]] = {
-    "QP layer (QPWorkspace.solve: PIQP setup/update + solve)": ("workspace.py", "solve"),
-    "  of which PIQP's own solve()": ("~", "<built-in method piqp.*.solve>"),
-    "QP assembly (KDSubproblem.build)": ("implicit_kd.py", "build"),
-    "QP input checks (KDSubproblem.inputs)": ("implicit_kd.py", "inputs"),
-    "f_IK update_reference": ("reference.py", "update_reference"),
-    "f_ref make_reference": ("reference.py", "make_reference"),
-    "  in f_IK + f_ref: whole_body_ik (kinematics/leg_ik.py)": (
-        "leg_ik.py",
-        "whole_body_ik",
-        "reference.py",
-    ),
-}
 
 
 def closed_loop(seconds: float, vx_mps: float, profiler: cProfile.Profile | None = None) -> dict:
@@ -200,18 +185,11 @@ def main() -> None:
     profiler = cProfile.Profile()
     prof_run = closed_loop(args.seconds, args.vx, profiler)
     stats = pstats.Stats(profiler)
-    total_solve_s = 1e-3 * sum(prof_run["ms"])
-    rows = []
-    for label, (file_name, function, *caller) in PARTS.items():
-        cum = 0.0
-        for (path, _, name), v in stats.stats.items():  # type: ignore[attr-defined]
-            if fnmatch.fnmatchcase(name, function) and Path(path).name == file_name:
-                if caller:  # only the calls made from the caller's file
-                    cum += sum(c[3] for k, c in v[4].items() if Path(k[0]).name == caller[0])
-                else:
-                    cum += v[3]
-        rows.append(f"| {label} | {cum:.2f} | {100 * cum / max(total_solve_s, 1e-9):.0f} % |")
-
+    total_s = 1e-3 * sum(prof_run["ms"])
+    rows = [
+        f"| {label} | {sec:.2f} | {100 * share:.0f} % |"
+        for label, sec, share in profile_parts(stats, total_s)
+    ]
     lines = [
         "# Implicit kino-dynamic sequential MPC: solve times",
         "",
@@ -226,7 +204,7 @@ def main() -> None:
         "",
         *compare,
         "Where the solve time goes (second run under cProfile, which inflates Python-heavy "
-        f"parts; cumulative over all solves, {total_solve_s:.2f} s of solve time):",
+        f"parts; cumulative over all solves, {total_s:.2f} s of solve time):",
         "",
         "| part | seconds | share of solve time |",
         "|---|---|---|",

@@ -73,3 +73,11 @@ def test_bench_refuses_bad_cases_before_timing(case: str, tmp_path: Path, capsys
     assert rc == 2
     assert "error" in capsys.readouterr().err
     assert not (tmp_path / "perf.md").exists()
+
+
+def test_bench_refuses_an_unknown_baseline_revision(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "perf.md"
+    rc = main(["bench", "--case", "x=kd", "--baseline", "no-such-revision", "--out", str(out)])
+    assert rc == 2
+    assert "--baseline" in capsys.readouterr().err
+    assert not out.exists()

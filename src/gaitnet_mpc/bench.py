@@ -57,11 +57,13 @@ TARGETS = {
 
 @dataclass(frozen=True)
 class BenchCase:
-    """One timed configuration: a controller of the ``kd`` family and ``--set`` overrides."""
+    """One timed configuration: a controller of the ``kd`` family and ``--set`` overrides;
+    with ``revision``, the package as it was at that git revision (before/after)."""
 
     label: str
     controller: str = "kd"
     overrides: tuple[str, ...] = ()
+    revision: str | None = None
 
 
 #: The default cases: the shipped settings, and the real-time-iteration replan (one QP
@@ -192,11 +194,40 @@ def timed_episode(
 
 
 # --------------------------------------------------------------------------- interleaving
-def _episode_in_subprocess(case: BenchCase, spec: EpisodeSpec, out: Path) -> EpisodeTiming:
-    """:func:`timed_episode` in a fresh Python process (no warm caches, no shared heap)."""
+def _episode_in_subprocess(
+    case: BenchCase, spec: EpisodeSpec, out: Path, source: Path | None = None
+) -> EpisodeTiming:
+    """:func:`timed_episode` in a fresh Python process (no warm caches, no shared heap);
+    with ``source``, the package is imported from that ``src`` folder (this file's
+    :func:`timed_episode` drives it, so both sides are timed the same way)."""
     payload = json.dumps({"case": asdict(case), "spec": asdict(spec), "out": str(out)})
-    subprocess.run([sys.executable, "-m", "gaitnet_mpc.bench", payload], check=True)
+    env = dict(os.environ)
+    if source is not None:
+        env["PYTHONPATH"] = str(source)
+    # run_path, not ``python FILE``: the file's folder must not shadow top-level modules
+    runner = f"import runpy; runpy.run_path({str(Path(__file__))!r}, run_name='__main__')"
+    subprocess.run([sys.executable, "-c", runner, payload], check=True, env=env)
     return EpisodeTiming(**json.loads(out.read_text()))
+
+
+def export_revision(revision: str, folder: Path) -> Path:
+    """The ``src`` folder of git revision ``revision`` of this repository, written under
+    ``folder``.
+
+    Raises:
+        ConfigError: not a git checkout, or an unknown revision.
+    """
+    repo = Path(__file__).resolve().parents[2]
+    archive = subprocess.run(
+        ["git", "-C", str(repo), "archive", "--format=tar", revision, "src"],
+        capture_output=True,
+    )
+    if archive.returncode != 0:
+        raise ConfigError("--baseline", revision, "a git revision of this checkout")
+    target = folder / revision
+    target.mkdir(parents=True, exist_ok=True)
+    subprocess.run(["tar", "-x", "-C", str(target)], input=archive.stdout, check=True)
+    return target / "src"
 
 
 @dataclass(frozen=True)
@@ -267,11 +298,17 @@ def run_bench(
         raise ConfigError("--rounds", rounds, "an integer >= 1")
     runs: dict[int, list[EpisodeTiming]] = {i: [] for i in range(len(cases))}
     with tempfile.TemporaryDirectory() as tmp:
+        sources = {
+            rev: export_revision(rev, Path(tmp))
+            for rev in {c.revision for c in cases if c.revision is not None}
+        }
         for r in range(rounds):
             for i, case in enumerate(cases):
                 if progress is not None:
                     progress(f"round {r + 1}/{rounds}: {case.label}")
-                runs[i].append(_episode_in_subprocess(case, spec, Path(tmp) / f"{i}.json"))
+                source = None if case.revision is None else sources[case.revision]
+                out = Path(tmp) / f"{i}.json"
+                runs[i].append(_episode_in_subprocess(case, spec, out, source))
     return [_combine(case, runs[i]) for i, case in enumerate(cases)]
 
 
@@ -399,7 +436,8 @@ def perf_markdown(
         growth = memory.rss_end_mb - memory.rss_start_mb
         lines += [
             "",
-            f"Memory: `{memory_case}`, one episode of {memory.sim_s:.0f} s simulated "
+            f"Memory: `{memory_case}`, one episode of {memory.sim_s:.0f} s simulated stepping "
+            "in place (vx 0) "
             f"({'FELL' if memory.fell else 'no fall'}, {memory.wall_s:.0f} s wall): RSS "
             f"{memory.rss_start_mb:.1f} MB after set-up, {memory.rss_end_mb:.1f} MB at the "
             f"end ({growth:+.1f} MB).",
@@ -412,6 +450,8 @@ def _worker(payload: str) -> None:
     """Entry of :func:`_episode_in_subprocess`: one timed episode, written as JSON."""
     args = json.loads(payload)
     case = BenchCase(**{**args["case"], "overrides": tuple(args["case"]["overrides"])})
+    if case.revision is not None:  # this file drives the package of PYTHONPATH's revision
+        case = BenchCase(case.label, case.controller, case.overrides)
     timing = timed_episode(case, EpisodeSpec(**args["spec"]))
     Path(args["out"]).write_text(json.dumps(asdict(timing)))
 

@@ -14,6 +14,7 @@ import json
 import math
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -355,8 +356,21 @@ def _add_collect_parsers(sub: Any) -> None:
         "--memory-seconds",
         type=float,
         default=0.0,
-        help="one episode this long of the first case, RSS at start and end (0: skip; "
-        "default: %(default)s)",
+        help="one episode this long, stepping in place (vx 0: the course is finite), RSS "
+        "at start and end (0: skip; default: %(default)s)",
+    )
+    b.add_argument(
+        "--memory-case",
+        default=None,
+        metavar="LABEL",
+        help="the case of the memory episode (default: the first)",
+    )
+    b.add_argument(
+        "--baseline",
+        default=None,
+        metavar="REV",
+        help="also time the first case with the package as it was at git revision REV, "
+        "interleaved, as the first row (the before/after comparison)",
     )
     b.add_argument("--no-profile", action="store_true", help="skip the cProfile breakdown")
     b.add_argument(
@@ -484,23 +498,34 @@ def _bench(args: argparse.Namespace) -> int:
     spec = EpisodeSpec(args.course, args.vx, args.seconds)
     if not (math.isfinite(args.memory_seconds) and args.memory_seconds >= 0.0):
         raise ConfigError("--memory-seconds", args.memory_seconds, "a finite time >= 0 s")
+    labels = [c.label for c in cases]
+    memory_case = cases[0]
+    if args.memory_case is not None:
+        if args.memory_case not in labels:
+            raise ConfigError("--memory-case", args.memory_case, f"one of {labels}")
+        memory_case = cases[labels.index(args.memory_case)]
     for case in cases:  # bad controller names or overrides fail here, before any timing
         build_case(case, spec)
+    if args.baseline is not None:
+        first = cases[0]
+        old = replace(first, label=f"{first.label} @ {args.baseline}", revision=args.baseline)
+        cases.insert(0, old)
 
     def say(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
     results = run_bench(cases, spec, args.rounds, progress=say)
     parts = None
+    profiled = cases[1] if args.baseline is not None else cases[0]  # this tree's first case
     if not args.no_profile:
-        say(f"profiling {cases[0].label}")
-        parts = profiled_episode(cases[0], spec)
+        say(f"profiling {profiled.label}")
+        parts = profiled_episode(profiled, spec)
     memory = None
     if args.memory_seconds > 0.0:
-        say(f"memory: {cases[0].label}, {args.memory_seconds:g} s simulated")
+        say(f"memory: {memory_case.label}, {args.memory_seconds:g} s simulated in place")
         memory = timed_episode(
-            cases[0],
-            EpisodeSpec(args.course, args.vx, args.memory_seconds),
+            memory_case,
+            EpisodeSpec(args.course, 0.0, args.memory_seconds),
             on_second=lambda t: say(f"  {t:.0f} s") if round(t) % 60 == 0 else None,
         )
     report = perf_markdown(
@@ -508,9 +533,9 @@ def _bench(args: argparse.Namespace) -> int:
         spec,
         args.rounds,
         parts,
-        cases[0].label,
+        profiled.label,
         memory,
-        cases[0].label,
+        memory_case.label,
         shlex.join(["gaitnet-mpc", *args.argv]),
     )
     write_atomic(args.out, report)
