@@ -13,7 +13,8 @@ as ``gaitnet-mpc bench --case``) walks humanoid3d at 0.75 m/s:
 * ``push``: at 0.5 m/s on flat, a 0.2 s forward or leftward push at t = 4 s of each force in
   ``--push-forces`` N, survived = no fall within 3 s after it.
 
-No constant was chosen on these runs. Writes ``benchmarks/results/replan_outcomes.md``.
+No constant was chosen on these runs. Writes ``benchmarks/results/replan_outcomes.md``
+(``--out``: another name there).
 Run::
 
     MUJOCO_GL=egl .venv/bin/python benchmarks/replan_outcomes.py [--jobs 2] [--seeds 20]
@@ -104,6 +105,7 @@ def main() -> None:
     parser.add_argument("--courses", default="gap,stepping-stones")
     parser.add_argument("--push-forces", default="20,30,40,60")
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--out", default="replan_outcomes.md", help="file in results/")
     args = parser.parse_args()
     cases = args.case or list(DEFAULT_CASES)
     courses = [c for c in args.courses.split(",") if c]
@@ -179,7 +181,7 @@ def main() -> None:
         f"`MUJOCO_GL=egl .venv/bin/python {command}`",
         "",
     ]
-    write_report("replan_outcomes.md", "\n".join(lines))
+    write_report(args.out, "\n".join(lines))
 
 
 if __name__ == "__main__":
