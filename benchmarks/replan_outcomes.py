@@ -28,6 +28,7 @@ import sys
 import time
 from functools import partial
 
+from gaitnet_mpc.bench import parse_case
 from machine import machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
@@ -46,12 +47,6 @@ DEFAULT_CASES = (
 Job = tuple[str, str, str, float]  # case text, course kind, seed or push direction, force
 
 
-def parse_case(text: str) -> tuple[str, str, tuple[str, ...]]:
-    label, _, rest = text.partition("=")
-    controller, _, sets = rest.partition(":")
-    return label, controller, tuple(x for x in sets.split(",") if x)
-
-
 def run(job: Job) -> dict:
     from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import (
@@ -66,7 +61,8 @@ def run(job: Job) -> dict:
     from gaitnet_mpc.terrain import load_course
 
     case, kind, arg, force_n = job
-    _, controller, overrides = parse_case(case)
+    parsed = parse_case(case)
+    controller, overrides = parsed.controller, parsed.overrides
     robot = load_robot("humanoid3d")
     pushes: tuple = ()
     vx, duration, preview = VX_MPS, SEEDED_S, False
@@ -141,7 +137,7 @@ def main() -> None:
         "|---|---|---|" + "---|" * len(courses) + "---|---|",
     ]
     for case in cases:
-        label = parse_case(case)[0]
+        label = parse_case(case).label
         flat = of(case, "flat")[0]
         flat_text = (
             f"FELL at {flat['fall_time_s']:.2f} s" if flat["fell"] else "no fall"

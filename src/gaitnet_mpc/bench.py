@@ -66,6 +66,20 @@ class BenchCase:
     revision: str | None = None
 
 
+def parse_case(text: str) -> BenchCase:
+    """``LABEL=CONTROLLER[:KEY=VALUE,...]`` (``--case``) -> :class:`BenchCase`.
+
+    Raises:
+        ConfigError: no label or no controller.
+    """
+    label, sep, rest = text.partition("=")
+    controller, _, sets = rest.partition(":")
+    if not sep or not label or not controller:
+        expected = "LABEL=CONTROLLER[:KEY=VALUE,...], e.g. rti=kd:replan_j_max=1"
+        raise ConfigError("--case", text, expected)
+    return BenchCase(label, controller, tuple(x for x in sets.split(",") if x))
+
+
 #: The default cases: the shipped settings, and the real-time-iteration replan (one QP
 #: per replan within a step, full convergence at step starts), for kd and gaitnet.
 DEFAULT_CASES = (

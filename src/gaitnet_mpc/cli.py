@@ -467,19 +467,6 @@ def _reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _bench_case(text: str) -> Any:
-    """``LABEL=CONTROLLER[:KEY=VALUE,...]`` -> :class:`BenchCase`."""
-    from gaitnet_mpc.bench import BenchCase
-
-    label, sep, rest = text.partition("=")
-    controller, _, sets = rest.partition(":")
-    if not sep or not label or not controller:
-        raise ConfigError(
-            "--case", text, "LABEL=CONTROLLER[:KEY=VALUE,...], e.g. rti=kd:replan_j_max=1"
-        )
-    return BenchCase(label, controller, tuple(x for x in sets.split(",") if x))
-
-
 def _bench(args: argparse.Namespace) -> int:
     import shlex
 
@@ -487,6 +474,7 @@ def _bench(args: argparse.Namespace) -> int:
         DEFAULT_CASES,
         EpisodeSpec,
         build_case,
+        parse_case,
         perf_markdown,
         profiled_episode,
         run_bench,
@@ -494,7 +482,7 @@ def _bench(args: argparse.Namespace) -> int:
     )
     from gaitnet_mpc.results.io import write_atomic
 
-    cases = [_bench_case(c) for c in args.case] if args.case else list(DEFAULT_CASES)
+    cases = [parse_case(c) for c in args.case] if args.case else list(DEFAULT_CASES)
     spec = EpisodeSpec(args.course, args.vx, args.seconds)
     if not (math.isfinite(args.memory_seconds) and args.memory_seconds >= 0.0):
         raise ConfigError("--memory-seconds", args.memory_seconds, "a finite time >= 0 s")
