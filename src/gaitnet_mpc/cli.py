@@ -515,6 +515,7 @@ def _bench(args: argparse.Namespace) -> int:
             memory_case,
             EpisodeSpec(args.course, 0.0, args.memory_seconds),
             on_second=lambda t: say(f"  {t:.0f} s") if round(t) % 60 == 0 else None,
+            record_ticks=False,
         )
     report = perf_markdown(
         results,
