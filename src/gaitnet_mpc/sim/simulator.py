@@ -213,8 +213,8 @@ class Simulator:
             m.geom(name).id: f for f in FEET for name in self.robot.spec.foot_geoms[f]
         }
         self._foot_sites = {f: m.site(self.robot.spec.foot_sites[f]).id for f in FEET}
-        # _contacts() of the current data; None once mj_step / mj_forward changed it
-        self._contact_cache: tuple[dict[str, np.ndarray], set[str], bool] | None = None
+        # _contacts() of the data, keyed by the time and qpos it was read at
+        self._contact_cache: tuple[bytes, _Contacts] | None = None
         #: geom id -> whether it belongs to the robot (its body is not the world body)
         self._robot_geom = m.geom_bodyid != 0
         self._body_names = [m.body(b).name for b in range(m.nbody)]
@@ -246,7 +246,6 @@ class Simulator:
             self.robot.standing_qpos(x0, y0, ground) if qpos is None else np.asarray(qpos)
         )
         mujoco.mj_forward(self.model, self.data)
-        self._contact_cache = None
         self._ground0_m = ground
         self._com_height0_m = float(self.data.subtree_com[self._trunk_id, 2] - ground)
         self.footholds.clear()
@@ -294,7 +293,6 @@ class Simulator:
         self.data.xfrc_applied[self._trunk_id, :3] = force
         warnings0 = self.data.warning.number[self._warn_ids].copy()
         mujoco.mj_step(self.model, self.data)
-        self._contact_cache = None
         t_end = t + self.model.opt.timestep
         reason = self._divergence(t, warnings0)
         if reason is None:
@@ -352,11 +350,10 @@ class Simulator:
         d.time = t_s
         d.xfrc_applied[:] = 0.0
         mujoco.mj_forward(self.model, d)
-        self._contact_cache = None
         self.self_contact = self._self_contacts() is not None
 
     # ---------------------------------------------------------------- read-out
-    def _contacts(self) -> tuple[dict[str, np.ndarray], set[str], bool]:
+    def _contacts(self) -> _Contacts:
         """Per-foot ground wrench, feet in contact, and whether a non-foot body touches terrain."""
         m, d = self.model, self.data
         wrench = {f: np.zeros(6) for f in FEET}
@@ -385,12 +382,15 @@ class Simulator:
             wrench[foot][3:] += _cross3(r, f_world)
         return wrench, touching, other
 
-    def _contacts_now(self) -> tuple[dict[str, np.ndarray], set[str], bool]:
-        """:meth:`_contacts` of the current MuJoCo data, computed once per step (the
-        step's fall checks and the next :meth:`state` read the same contacts)."""
-        if self._contact_cache is None:
-            self._contact_cache = self._contacts()
-        wrench, touching, other = self._contact_cache
+    def _contacts_now(self) -> _Contacts:
+        """:meth:`_contacts` of the current MuJoCo data, computed once per state (the
+        step's fall checks and the next :meth:`state` read the same contacts); the cache
+        is keyed by the time and ``qpos``, so a state set from outside is read afresh."""
+        d = self.data
+        key = np.float64(d.time).tobytes() + d.qpos.tobytes()
+        if self._contact_cache is None or self._contact_cache[0] != key:
+            self._contact_cache = (key, self._contacts())
+        wrench, touching, other = self._contact_cache[1]
         return {f: w.copy() for f, w in wrench.items()}, set(touching), other
 
     def _self_contacts(self) -> np.ndarray | None:
@@ -492,6 +492,10 @@ class Simulator:
             foot_contact={f: f in touching for f in FEET},
             foot_wrench_world=wrench,
         )
+
+
+#: Per-foot ground wrench, the feet in contact, and whether a non-foot body touches terrain.
+_Contacts = tuple[dict[str, np.ndarray], set[str], bool]
 
 
 def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
