@@ -26,7 +26,7 @@ from functools import partial
 
 import numpy as np
 
-from machine import machine_info, run_pool, write_report
+from machine import clean_run, machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -75,7 +75,7 @@ def run(job: Job, weights: str | None) -> dict:
     policy = s.get("dt_policy") or {}
     dts = [d["dts_s"][-1] for d in policy.get("steps", [])]
     return {
-        "clean": not s["fell"] and s["foothold_violations"] == 0 and not s["self_collisions"],
+        "clean": clean_run(s),
         "fell": s["fell"],
         "fall_time_s": s["fall_time_s"],
         "distance_m": s["distance_m"],

@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from machine import machine_info, run_pool, write_report
+from machine import clean_run, machine_info, run_pool, write_report
 
 #: Configurations: name -> multi-step preview on (the gap is run without it only).
 CONFIGS = {
@@ -62,7 +62,7 @@ def run(job: Job) -> dict:
     s = run_episode(sim, ctrl, command, DURATION_S, progress=False)
     contacts = int(s.get("self_collisions") or 0)
     return {
-        "clean": not s["fell"] and s["foothold_violations"] == 0 and contacts == 0,
+        "clean": clean_run(s),
         "fell": s["fell"],
         "distance_m": s["distance_m"],
         "violations": s["foothold_violations"],

@@ -9,7 +9,14 @@ from typing import Any
 
 from gaitnet_mpc.machine import machine_info
 
-__all__ = ["machine_info", "run_pool", "write_report"]
+__all__ = ["clean_run", "machine_info", "run_pool", "write_report"]
+
+
+def clean_run(summary: dict[str, Any]) -> bool:
+    """A run's ``summary.json`` counts as clean in the success-rate reports: no fall, no
+    foothold violation and no leg-leg contact."""
+    no_contact = not summary["self_collisions"]  # a tick count, or None without any
+    return not summary["fell"] and summary["foothold_violations"] == 0 and no_contact
 
 
 def write_report(name: str, report: str) -> None:

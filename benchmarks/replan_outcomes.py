@@ -26,10 +26,9 @@ import argparse
 import shlex
 import sys
 import time
-from functools import partial
 
 from gaitnet_mpc.bench import parse_case
-from machine import machine_info, run_pool, write_report
+from machine import clean_run, machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -83,7 +82,7 @@ def run(job: Job) -> dict:
     s = run_episode(sim, ctrl, command, duration, progress=False)
     mpc = s.get("mpc") or {}
     return {
-        "clean": not s["fell"] and s["foothold_violations"] == 0 and not s["self_collisions"],
+        "clean": clean_run(s),
         "fell": s["fell"],
         "fall_time_s": s["fall_time_s"],
         "distance_m": s["distance_m"],
@@ -112,7 +111,7 @@ def main() -> None:
         jobs += [(case, c, str(s), 0.0) for c in courses for s in range(args.seeds)]
         jobs += [(case, "push", d, f) for d in ("fwd", "left") for f in forces]
     t0 = time.perf_counter()
-    results: dict[Job, dict] = run_pool(partial(run), jobs, args.jobs)
+    results: dict[Job, dict] = run_pool(run, jobs, args.jobs)
     wall_s = time.perf_counter() - t0
 
     def of(case: str, kind: str) -> list[dict]:

@@ -133,8 +133,8 @@ def rss_mb() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3
 
 
-def build_case(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any, Any]:
-    """(simulator, controller, command) of one episode.
+def build_case(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any]:
+    """(simulator, controller) of one episode.
 
     Raises:
         ConfigError: an unknown controller or a bad override.
@@ -157,7 +157,7 @@ def build_case(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any, Any]:
     command = Command(vx_mps=spec.vx_mps)
     config = controller_config(case.controller, robot.spec.planar, overrides=list(case.overrides))
     ctx = ControllerContext(robot, course, command, config=config)
-    return Simulator(robot, course), make_controller(case.controller, ctx), command
+    return Simulator(robot, course), make_controller(case.controller, ctx)
 
 
 def timed_episode(
@@ -170,7 +170,7 @@ def timed_episode(
     """Walk ``spec`` with ``case`` and time every tick (stops at a fall). With
     ``record_ticks=False`` the per-tick times are not kept (a long memory episode:
     1000 list entries per simulated second would be the growth it measures)."""
-    sim, ctrl, _ = build_case(case, spec)
+    sim, ctrl = build_case(case, spec)
     state = sim.state()
     ctrl.reset(state)
     x0 = float(state.qpos[0])
