@@ -11,11 +11,13 @@ humanoid3d at 0.75 m/s with the paper's one-step preview. Rows:
   foothold violation, no leg-leg contact.
 
 Controllers: ``gaitnet`` (policy settings as shipped), ``gaitnet:r<K>`` (``max_retimes``
-K; ``r0``: no limit), ``oracle``, ``kd@<dt>``. Writes ``benchmarks/results/gaitnet_runs.md``. Run::
+K; ``r0``: no limit), ``oracle``, ``kd@<dt>``; ``--set KEY=VALUE`` changes a
+``KDWalkConfig`` setting of all of them (as ``gaitnet-mpc run --set``). Writes
+``benchmarks/results/gaitnet_runs.md`` (``--out NAME``: another name). Run::
 
     .venv/bin/python benchmarks/gaitnet_runs.py [--seeds 20] [--dts 0.045,0.055,0.065] \
         [--courses gap,stepping-stones] [--weights PATH] [--jobs 2] \
-        [--variants gaitnet:r1,oracle] [--seed-offset 0]
+        [--variants gaitnet:r1,oracle] [--seed-offset 0] [--set KEY=VALUE] [--out NAME]
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ VX_MPS = 0.75
 Job = tuple[str, str, int | None]  # controller ("gaitnet" or "kd@<dt>"), course, seed
 
 
-def run(job: Job, weights: str | None) -> dict:
+def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.control.registry import ControllerContext, controller_config, make_controller
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
@@ -46,17 +48,16 @@ def run(job: Job, weights: str | None) -> dict:
     name, course_name, seed = job
     robot, command = load_robot("humanoid3d"), Command(VX_MPS)
     course = load_course(course_name, **({} if seed is None else {"seed": seed}))
+    config = controller_config("kd", planar=False, overrides=overrides)
     if name.startswith("gaitnet"):
         from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController, load_gaitnet
         from gaitnet_mpc.control.kd_walk_config import walk_terrain
-        from gaitnet_mpc.control.registry import controller_config
         from gaitnet_mpc.gaitnet.policy import GaitNetPolicyConfig
 
         policy = GaitNetPolicyConfig()  # as shipped; gaitnet:r0 = no limit, gaitnet:rK = K
         if ":r" in name:
             k = int(name.split(":r")[1])
             policy = GaitNetPolicyConfig(max_retimes=k if k > 0 else None)
-        config = controller_config("gaitnet", planar=False)
         ctrl = GaitNetWalkController(
             robot,
             walk_terrain(course, config),
@@ -66,10 +67,11 @@ def run(job: Job, weights: str | None) -> dict:
             policy,
         )
     elif name == "oracle":
-        ctrl = make_controller("oracle", ControllerContext(robot, course, command))
+        ctrl = make_controller("oracle", ControllerContext(robot, course, command, config=config))
     else:
         dt = float(name.split("@")[1])
-        ctrl = make_controller("kd", ControllerContext(robot, course, command, {"dt_s": dt}))
+        ctx = ControllerContext(robot, course, command, {"dt_s": dt}, config)
+        ctrl = make_controller("kd", ctx)
     duration = FLAT_S if course_name == "flat" else SEEDED_S
     s = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
     policy = s.get("dt_policy") or {}
@@ -98,6 +100,15 @@ def main() -> None:
     parser.add_argument("--variants", default="", help="more controllers: gaitnet:rK, oracle")
     parser.add_argument("--seed-offset", type=int, default=0, help="first seed (tuning: 100)")
     parser.add_argument("--no-flat", action="store_true", help="skip the 20 s flat runs")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a kd-family setting for every controller (as `gaitnet-mpc run --set`)",
+    )
+    parser.add_argument("--out", default=None, help="report name (default by --seed-offset)")
     args = parser.parse_args()
     names = ["gaitnet", *[v for v in args.variants.split(",") if v]]
     names += [f"kd@{float(d):g}" for d in args.dts.split(",") if d]
@@ -107,7 +118,9 @@ def main() -> None:
     jobs += [(n, c, s) for n in names for c in courses for s in seeds]
     use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
     t0 = time.perf_counter()
-    results: dict[Job, dict] = run_pool(partial(run, weights=args.weights), jobs, args.jobs)
+    overrides = tuple(args.overrides)
+    worker = partial(run, weights=args.weights, overrides=overrides)
+    results: dict[Job, dict] = run_pool(worker, jobs, args.jobs)
     wall_s = time.perf_counter() - t0
     lines = [
         "# gaitnet beside kd at fixed dts",
@@ -118,7 +131,9 @@ def main() -> None:
         f"gap and stepping-stones: {args.seeds} seeded layouts "
         f"({seeds[0]}-{seeds[-1]}{', tuning seeds' if args.seed_offset else ''}), "
         f"{SEEDED_S:.0f} s each, {use}. Gait-Net weights: "
-        f"{args.weights or 'shipped'}. Clean: no fall, no violation, no leg-leg contact.",
+        f"{args.weights or 'shipped'}. Settings: "
+        f"{', '.join(overrides) if overrides else 'as shipped'}. "
+        "Clean: no fall, no violation, no leg-leg contact.",
         "",
         "| controller | course | clean | no fall | mean distance [m] | violations "
         "| chosen dt [s] median (min-max) | fallbacks | QPs per full solve | full solve ms |",
@@ -148,10 +163,12 @@ def main() -> None:
         f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts '{args.dts}' "
         f"--courses {args.courses} --variants '{args.variants}' --seed-offset {args.seed_offset}"
         + (" --no-flat" if args.no_flat else "")
+        + "".join(f" --set {o}" for o in overrides)
+        + (f" --out {args.out}" if args.out else "")
         + (f" --weights {args.weights}`." if args.weights else "`."),
         "",
     ]
-    name = "gaitnet_runs_tuning.md" if args.seed_offset else "gaitnet_runs.md"
+    name = args.out or ("gaitnet_runs_tuning.md" if args.seed_offset else "gaitnet_runs.md")
     write_report(name, "\n".join(lines))
 
 

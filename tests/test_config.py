@@ -21,7 +21,9 @@ from gaitnet_mpc.mpc.sequential import SequentialConfig
 
 
 def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
-    """``kd_walk.paper_walk_config`` as it was before the presets became TOML files."""
+    """``kd_walk.paper_walk_config`` as it was before the presets became TOML files, with
+    the CoP over the whole foot (``cop_fraction`` 1, added to the preset when the default
+    became 0.6)."""
     if planar:
         kd = KDConfig(
             w_momentum=(20.0,) * 6,
@@ -37,6 +39,7 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
         low_level=LowLevelConfig(),
         keep_feet_apart=False,
         lateral_return_time_s=None,
+        cop_fraction=1.0,
     )
 
 
@@ -118,6 +121,8 @@ def test_overrides_are_typed_and_nested() -> None:
         ("keep_feet_apart=1", "keep_feet_apart: got 1, expected true or false"),
         ("lateral_reference=zigzag", "lateral_reference: got 'zigzag', expected 'line'"),
         ("lateral_return_time_s=-1", "lateral_return_time_s: got -1.0, expected None or"),
+        ("cop_fraction=0", "cop_fraction: got 0.0, expected a fraction in (0, 1]"),
+        ("cop_fraction=1.5", "cop_fraction: got 1.5, expected a fraction in (0, 1]"),
         ("sequential.kd=3", "sequential.kd: got 3, expected a table of KDConfig"),
         ("sequential.kd.w_forse=1", "close matches: sequential.kd.w_force"),
         ("w_force=1", "w_force: got 1, expected a field of KDWalkConfig; close matches: "),

@@ -127,7 +127,9 @@ def test_weights_file_errors_name_the_problem(tmp_path):
 def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path):
     """The shipped weights in Algorithm 1's loop: the humanoid walks 4 s on flat, every
     step start asked the net inside its iterations, each step lasts h' of its dt and the
-    dts stay inside the paper's bounds; mpc_log.csv records each step start's dt calls."""
+    dts stay inside the paper's bounds; mpc_log.csv records each step start's dt calls.
+    No stance foot slips or spins (with the CoP over the whole foot, ``cop_fraction`` 1,
+    this run had two pivots and two slips)."""
     from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
     from gaitnet_mpc.results.rundir import read_csv_columns
@@ -153,6 +155,8 @@ def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path)
     assert np.all((chosen >= 0.045 - 1e-12) & (chosen <= 0.07 + 1e-12))
     np.testing.assert_allclose(summary["step_durations_s"], 5 * chosen, atol=1e-3)
     assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
+    events = (tmp_path / "events.csv").read_text().splitlines()
+    assert not [e for e in events if ",slip," in e or ",pivot," in e]
 
 
 class _DriftingNet:

@@ -119,20 +119,19 @@ def test_cd_sqp_carries_no_solver_state_between_problems(saved: Path) -> None:
     assert b.cost == pytest.approx(a.cost, rel=1e-9)
 
 
-def test_ad3_converges_near_the_proposed_cost(saved: Path) -> None:
-    """AD(3) converges (within its 50 rounds) on one of the first recorded problems
-    (it converges on about 20 % of them: its rate is linear), to a feasible plan whose
-    eq. 18 cost is within [0.8, 1.05] of the proposed plan's (scored on the same CD
-    problem) and within 1 % of CD-SQP's."""
+def test_ad3_reaches_cd_sqps_cost_near_the_proposed_one(saved: Path) -> None:
+    """AD(3)'s 50 rounds on the first recorded problem give a feasible plan whose eq. 18
+    cost is within 1 % of CD-SQP's and within [0.8, 1.05] of the proposed plan's (scored on
+    the same CD problem). Its rate is linear: with the CoP within 0.6 of the foot
+    (``KDWalkConfig.cop_fraction``) it meets Table X's step test on none of this
+    recording's 21 problems, though its cost is then within 0.2 % of CD-SQP's (with the
+    whole foot it met it on about 20 %)."""
     kd = kd_solver()
-    for rec in load_problems(saved, 8):
-        cd = centroidal_problem(kd, rec.problem)
-        res = AD3().solve(cd)
-        assert res.n_qps % 3 == 0
-        assert max(cd_violation(cd, res.solution).values()) < FEASIBLE
-        if res.converged:
-            break
-    assert res.converged
+    rec = load_problems(saved, 1)[0]
+    cd = centroidal_problem(kd, rec.problem)
+    res = AD3().solve(cd)
+    assert res.n_qps % 3 == 0
+    assert max(cd_violation(cd, res.solution).values()) < FEASIBLE
     it = kd.solve(rec.problem).iterate
     plan = CDSolution(rollout(cd, it.f, it.tau, it.p_foot), it.f, it.tau, it.p_foot)
     assert 0.8 <= res.cost / cd_cost(cd, plan) <= 1.05

@@ -80,8 +80,8 @@ class KDWalkController(WalkingBase):
         kd = replace(
             self.config.sequential.kd,
             mass_kg=robot.total_mass_kg,
-            toe_m=robot.spec.foot_toe_m,
-            heel_m=robot.spec.foot_heel_m,
+            toe_m=self.config.cop_fraction * robot.spec.foot_toe_m,
+            heel_m=self.config.cop_fraction * robot.spec.foot_heel_m,
             min_foot_separation_m=(
                 robot.min_foot_separation_m if self.config.keep_feet_apart else None
             ),

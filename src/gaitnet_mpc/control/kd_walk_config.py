@@ -113,11 +113,21 @@ class KDWalkConfig:
     # (KDConfig.min_foot_separation_m = RobotModel.min_foot_separation_m) and swing targets
     # held on the swing foot's own side of the stance foot. False: the paper's QP.
     keep_feet_apart: bool = True
+    # Fraction of the foot's toe and heel distances the MPC may move the centre of pressure
+    # to (eq. 21-23's wrench rows; 1: the whole foot, as the paper). At the toe or heel edge
+    # the box foot tips onto one edge, loses its yaw friction and spins: 2 pivots and 2
+    # slips per 6 s on flat with 1.0, none with 0.6. Chosen on tuning seeds 100-109
+    # (docs/design/cop_margin.md): clean stones / gaps 0/10 / 9/10 (gaitnet) and 0/10 /
+    # 8/10 (kd, dt 0.045) with 1.0; 1/10 / 10/10 and 0/10 / 10/10 with 0.6; 1/10 / 7/10
+    # and 1/10 / 10/10 with 0.3.
+    cop_fraction: float = 0.6
 
     def __post_init__(self) -> None:
         j = self.replan_j_max
         if isinstance(j, bool) or not isinstance(j, int) or j < 1:
             raise ConfigError("replan_j_max", j, "an integer >= 1 (1: one QP per replan)")
+        if not (0.0 < self.cop_fraction <= 1.0):
+            raise ConfigError("cop_fraction", self.cop_fraction, "a fraction in (0, 1]")
         if self.lateral_reference not in ("line", "lip"):
             raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
         tau = self.lateral_return_time_s
