@@ -173,6 +173,52 @@ class _DriftingNet:
         return self.dt_s, self.spread_s
 
 
+class _ConstantNet:
+    """A stand-in network that always answers ``dt_s`` with a small spread."""
+
+    feature_names = FEATURE_NAMES
+
+    def __init__(self, dt_s: float) -> None:
+        from types import SimpleNamespace
+
+        self.dt_s = dt_s
+        self.spec = SimpleNamespace(teacher="stand-in", data_manifest_sha256="", members=1)
+
+    def predict(self, x: np.ndarray) -> tuple[float, float]:
+        return self.dt_s, 1e-4
+
+
+@pytest.mark.parametrize("carry_dt", [False, True])
+def test_each_step_starts_its_iterations_from_the_nominal_dt(humanoid, carry_dt: bool) -> None:
+    """Algorithm 1 line 3: every step start's first iteration plans with the nominal dt^0
+    (0.045 s), whatever the step before chose (here always 0.06 s); ``carry_dt`` starts
+    it from the previous step's dt instead."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.command import Command
+    from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+    from gaitnet_mpc.control.terrain_view import TerrainView
+    from gaitnet_mpc.sim.simulator import Simulator
+    from gaitnet_mpc.terrain import load_course
+
+    course, command = load_course("flat"), Command(0.5)
+    config = replace(KDWalkConfig(), carry_dt=carry_dt)
+    net = _ConstantNet(0.06)
+    ctrl = GaitNetWalkController(humanoid, TerrainView(course), command, net, config)  # type: ignore[arg-type]
+    sim = Simulator(humanoid, course)
+    state = sim.state()
+    ctrl.reset(state)
+    while state.t_s < 1.0:
+        sim.step(ctrl.compute(state))
+        state = sim.state()
+    starts = [d.start_dt_s for d in ctrl.policy.decisions]
+    assert len(starts) >= 3
+    assert all(d.dts_s[-1] == pytest.approx(0.06) for d in ctrl.policy.decisions)
+    expected = [0.045] + [0.06 if carry_dt else 0.045] * (len(starts) - 1)
+    np.testing.assert_allclose(starts, expected)
+
+
 def _ask(policy, problem, calls: int) -> list[float]:
     """The dts the policy gives over ``calls`` iterations of one step start."""
     out, dt = [], 0.045

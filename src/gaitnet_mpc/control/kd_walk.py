@@ -378,7 +378,8 @@ class KDWalkController(WalkingBase):
         td = result.touchdown(swing)
         if full and result.step_dt_s != sched.current_step_dt_s:
             sched.set_step_dt(result.step_dt_s)  # the policy's dt: the swing lasts h' dt
-            sched.set_next_step_dt(result.step_dt_s)  # and dt^0 of the next step
+            if self.config.carry_dt:  # dt^0 of the next step; else the nominal one
+                sched.set_next_step_dt(result.step_dt_s)
             self.swing = self._swing_trajectory(target if td is None else td)
         if td is not None and self.swing is not None:
             td = td.copy()

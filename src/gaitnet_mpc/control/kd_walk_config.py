@@ -121,6 +121,11 @@ class KDWalkConfig:
     # 8/10 (kd, dt 0.045) with 1.0; 1/10 / 10/10 and 0/10 / 10/10 with 0.6; 1/10 / 7/10
     # and 1/10 / 10/10 with 0.3.
     cop_fraction: float = 0.6
+    # dt^0 of a step (Algorithm 1 line 3: the dt its first iteration plans with, and the
+    # dt of the horizon's next step): False: the policy's nominal dt, as the paper
+    # (f_ref with "a nominal sampling duration dt^0"); True: the dt the previous step
+    # chose.
+    carry_dt: bool = False
 
     def __post_init__(self) -> None:
         j = self.replan_j_max
