@@ -114,12 +114,10 @@ class KDWalkConfig:
     # held on the swing foot's own side of the stance foot. False: the paper's QP.
     keep_feet_apart: bool = True
     # Fraction of the foot's toe and heel distances the MPC may move the centre of pressure
-    # to (eq. 21-23's wrench rows; 1: the whole foot, as the paper). At the toe or heel edge
-    # the box foot tips onto one edge, loses its yaw friction and spins: 2 pivots and 2
-    # slips per 6 s on flat with 1.0, none with 0.6. Chosen on tuning seeds 100-109
-    # (docs/design/cop_margin.md): clean stones / gaps 0/10 / 9/10 (gaitnet) and 0/10 /
-    # 8/10 (kd, dt 0.045) with 1.0; 1/10 / 10/10 and 0/10 / 10/10 with 0.6; 1/10 / 7/10
-    # and 1/10 / 10/10 with 0.3.
+    # to (the wrench rows of mpc/contact.py; 1: the whole foot, as the paper). At the toe
+    # or heel the box foot tips onto one edge, loses its yaw friction and spins (2 pivots
+    # and 2 slips in 6 s of flat walking with 1.0, none with 0.6). 0.6 was chosen on
+    # tuning seeds 100-109 (docs/design/cop_margin.md).
     cop_fraction: float = 0.6
     # dt^0 of a step (Algorithm 1 line 3: the dt its first iteration plans with, and the
     # dt of the horizon's next step): False: the policy's nominal dt, as the paper
