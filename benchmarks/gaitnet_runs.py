@@ -1,7 +1,8 @@
 """``gaitnet`` (Gait-Net choosing each step's dt) beside ``kd`` at fixed dts and the
 grid-search ``oracle``: success rates.
 
-humanoid3d at 0.75 m/s with the paper's one-step preview. Rows:
+humanoid3d at 0.75 m/s with the paper's one-step preview (``--set preview={}``: the
+multi-step one). Rows:
 
 * ``flat``: one 20 s run per controller: fall, distance, the dts Gait-Net chose;
 * ``gap`` / ``stepping-stones``: ``--seeds`` randomised layouts (seeds
@@ -119,6 +120,10 @@ def main() -> None:
     use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
     t0 = time.perf_counter()
     overrides = tuple(args.overrides)
+    from gaitnet_mpc.control.registry import controller_config
+
+    multi_step = controller_config("kd", planar=False, overrides=overrides).preview is not None
+    preview = "multi-step preview (`--preview`)" if multi_step else "one-step preview"
     worker = partial(run, weights=args.weights, overrides=overrides)
     results: dict[Job, dict] = run_pool(worker, jobs, args.jobs)
     wall_s = time.perf_counter() - t0
@@ -127,7 +132,7 @@ def main() -> None:
         "",
         machine_info(("numpy", "mujoco", "pin", "piqp")),
         "",
-        f"humanoid3d, {VX_MPS} m/s, one-step preview, self-collision on. Flat: {FLAT_S:.0f} s; "
+        f"humanoid3d, {VX_MPS} m/s, {preview}, self-collision on. Flat: {FLAT_S:.0f} s; "
         f"gap and stepping-stones: {args.seeds} seeded layouts "
         f"({seeds[0]}-{seeds[-1]}{', tuning seeds' if args.seed_offset else ''}), "
         f"{SEEDED_S:.0f} s each, {use}. Gait-Net weights: "
