@@ -302,7 +302,7 @@ def test_kd_preview_crosses_the_stepping_stones(humanoid) -> None:
 def test_lateral_offset_from_the_path_decays(humanoid) -> None:
     """Pushed sideways while walking, the robot walks back to its commanded path with
     ``lateral_return_time_s`` and keeps (part of) the offset without it. The offset is the
-    mean over the last two steps (0.45 s): the CoM sways about 2 cm to each side within a
+    mean over the last two steps (0.45 s): the CoM sways from side to side within each
     step, so one sample mixes the sway into it."""
     from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
     from gaitnet_mpc.sim.disturbances import Push
