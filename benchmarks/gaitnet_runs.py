@@ -92,6 +92,8 @@ def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
 
 
 def main() -> None:
+    from gaitnet_mpc.control.registry import controller_config
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--dts", default="0.045,0.055,0.065", help="kd's fixed dts [s]")
@@ -118,12 +120,10 @@ def main() -> None:
     jobs: list[Job] = [] if args.no_flat else [(n, "flat", None) for n in names]
     jobs += [(n, c, s) for n in names for c in courses for s in seeds]
     use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
-    t0 = time.perf_counter()
-    overrides = tuple(args.overrides)
-    from gaitnet_mpc.control.registry import controller_config
-
+    overrides = tuple(args.overrides)  # a bad one fails here, before any episode
     multi_step = controller_config("kd", planar=False, overrides=overrides).preview is not None
     preview = "multi-step preview (`--preview`)" if multi_step else "one-step preview"
+    t0 = time.perf_counter()
     worker = partial(run, weights=args.weights, overrides=overrides)
     results: dict[Job, dict] = run_pool(worker, jobs, args.jobs)
     wall_s = time.perf_counter() - t0
