@@ -103,6 +103,7 @@ def main() -> None:
     parser.add_argument("--variants", default="", help="more controllers: gaitnet:rK, oracle")
     parser.add_argument("--seed-offset", type=int, default=0, help="first seed (tuning: 100)")
     parser.add_argument("--no-flat", action="store_true", help="skip the 20 s flat runs")
+    parser.add_argument("--no-gaitnet", action="store_true", help="only --variants and --dts")
     parser.add_argument(
         "--set",
         dest="overrides",
@@ -113,7 +114,8 @@ def main() -> None:
     )
     parser.add_argument("--out", default=None, help="report name (default by --seed-offset)")
     args = parser.parse_args()
-    names = ["gaitnet", *[v for v in args.variants.split(",") if v]]
+    names = [] if args.no_gaitnet else ["gaitnet"]
+    names += [v for v in args.variants.split(",") if v]
     names += [f"kd@{float(d):g}" for d in args.dts.split(",") if d]
     courses = [c for c in args.courses.split(",") if c]
     seeds = range(args.seed_offset, args.seed_offset + args.seeds)
@@ -168,6 +170,7 @@ def main() -> None:
         f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts '{args.dts}' "
         f"--courses {args.courses} --variants '{args.variants}' --seed-offset {args.seed_offset}"
         + (" --no-flat" if args.no_flat else "")
+        + (" --no-gaitnet" if args.no_gaitnet else "")
         + "".join(f" --set {o}" for o in overrides)
         + (f" --out {args.out}" if args.out else "")
         + (f" --weights {args.weights}`." if args.weights else "`."),

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.table2.ad3 import AD3
 from gaitnet_mpc.table2.cd_problem import (
     CDProblem,
@@ -74,9 +75,19 @@ def test_recording_round_trip_gives_the_same_plan(recording: Recording, saved: P
         np.testing.assert_allclose(again.dts_s, original.dts_s, rtol=0, atol=1e-12)
 
 
-def test_load_rejects_a_foreign_file(tmp_path: Path) -> None:
-    from gaitnet_mpc.errors import ConfigError
+def test_recording_keeps_its_cop_fraction(recording: Recording, tmp_path: Path) -> None:
+    """The CoP fraction a file was recorded with comes back with its problems, and the
+    wrench rows of :func:`kd_solver` follow it."""
+    path = save_problems(tmp_path / "p.npz", recording.problems[:1], cop_fraction=0.6)
+    assert load_problems(path)[0].cop_fraction == 0.6
+    assert kd_solver(cop_fraction=0.6).config.kd.toe_m == pytest.approx(
+        0.6 * kd_solver().config.kd.toe_m
+    )
+    with pytest.raises(ConfigError, match="cop_fraction: got 0.0"):
+        RecordingSpec(cop_fraction=0.0)
 
+
+def test_load_rejects_a_foreign_file(tmp_path: Path) -> None:
     path = tmp_path / "other.npz"
     np.savez(path, x=np.zeros(3))
     with pytest.raises(ConfigError, match="problems file"):
@@ -120,16 +131,16 @@ def test_cd_sqp_carries_no_solver_state_between_problems(saved: Path) -> None:
 
 
 def test_ad3_reaches_cd_sqps_cost_near_the_proposed_one(saved: Path) -> None:
-    """AD(3)'s 50 rounds on the first recorded problem give a feasible plan whose eq. 18
+    """AD(3)'s 50 rounds on the first recorded problem (the whole foot, as Table II's
+    recording: ``RecordingSpec.cop_fraction`` 1.0) converge to a feasible plan whose eq. 18
     cost is within 1 % of CD-SQP's and within [0.8, 1.05] of the proposed plan's (scored on
-    the same CD problem). Its rate is linear: with the CoP within 0.6 of the foot
-    (``KDWalkConfig.cop_fraction``) it meets Table X's step test on none of this
-    recording's 21 problems, though its cost is then within 0.2 % of CD-SQP's (with the
-    whole foot it met it on about 20 %)."""
+    the same CD problem)."""
     kd = kd_solver()
     rec = load_problems(saved, 1)[0]
     cd = centroidal_problem(kd, rec.problem)
+    assert rec.cop_fraction == 1.0
     res = AD3().solve(cd)
+    assert res.converged
     assert res.n_qps % 3 == 0
     assert max(cd_violation(cd, res.solution).values()) < FEASIBLE
     it = kd.solve(rec.problem).iterate

@@ -182,6 +182,7 @@ class KDWalkController(WalkingBase):
                 nominal[:2],
                 reach_x_m=self.config.foothold_reach_m,
                 margin_m=self.config.foothold_margin_m,
+                margin_y_m=self.config.foothold_margin_y_m,
             )
         r = self.robot.spec.foot_contact_radius_m
         lo, hi = lo.copy(), hi.copy()

@@ -87,7 +87,20 @@ class KDWalkConfig:
     # the swing feedforward). With 0.05 the heel or toe overhung an edge and the foot
     # slid off it during stance (gap at dt 0.045 / 0.055 / 0.065: 1 violation each).
     foothold_margin_m: float = 0.08
-    foothold_reach_m: float = 0.2  # |x_foot - x_com| at touchdown that selects a patch
+    # One-step preview (reach rule, below): the box's margin across the patch [m]. The
+    # foot is 2 cm wide, so 0.03 m keeps it on the patch with 2 cm to spare (the multi-step
+    # preview's PreviewConfig.foothold_margin_y_m is the same). With 0.08 (until 2026-12,
+    # foothold_margin_m in both axes) the lateral box on a 0.22 m stone was 6 cm wide and
+    # the MPC's touchdowns pressed its inner edge. Chosen with foothold_reach_m on tuning
+    # seeds 100-109 (docs/design/foothold_margin.md): 0.02 / 0.03 / 0.04 / 0.05 m gave
+    # 8 (with 5 violations) / 8 / 6 / 5 of 10 stone layouts clean for gaitnet.
+    foothold_margin_y_m: float = 0.03
+    # |x_foot - x_com| at touchdown within which the reach rule considers a patch [m].
+    # 0.2 (until 2026-12) left the next stone out of reach behind a platform's edge, so the
+    # robot took a zero-length step there and then a long one it could not stop from.
+    # Tuning seeds 100-109, stone layouts clean for gaitnet: 1/10 with 0.2 m (0.08 m across),
+    # 4/10 with 0.3 m alone; with a 0.04 m lateral margin 0.25 / 0.3 / 0.35 m gave 3 / 6 / 6.
+    foothold_reach_m: float = 0.3
     touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
     # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
     # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
@@ -133,6 +146,10 @@ class KDWalkConfig:
             raise ConfigError("cop_fraction", self.cop_fraction, "a fraction in (0, 1]")
         if self.lateral_reference not in ("line", "lip"):
             raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
+        for name in ("foothold_margin_m", "foothold_margin_y_m", "foothold_reach_m"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0.0):
+                raise ConfigError(name, value, "a finite distance >= 0 m")
         tau = self.lateral_return_time_s
         if tau is not None and not (np.isfinite(tau) and tau > 0.0):
             raise ConfigError("lateral_return_time_s", tau, "None or a finite time > 0 s")

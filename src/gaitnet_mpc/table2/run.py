@@ -158,7 +158,7 @@ def run_table2(
     names += ["CD-SQP (OSQP)"] if with_osqp else []
     names += ["explicit KD-SQP", "WBD-SQP"] if with_joint_space else []
     done = _read_records(records_path, names) if records_path is not None else {}
-    solve = _ProblemSolver(with_osqp, with_joint_space)
+    solve = _ProblemSolver(with_osqp, with_joint_space, recorded[0].cop_fraction)
     horizon = 0
     for n, rec in enumerate(recorded):
         if n not in done:
@@ -218,9 +218,9 @@ Record = tuple[float, int, bool, float]
 class _ProblemSolver:
     """Every method, built once, solving one recorded problem (methods interleaved)."""
 
-    def __init__(self, with_osqp: bool, with_joint_space: bool) -> None:
-        self.kd = kd_solver()
-        self.cd_builder = kd_solver()
+    def __init__(self, with_osqp: bool, with_joint_space: bool, cop_fraction: float) -> None:
+        self.kd = kd_solver(cop_fraction=cop_fraction)
+        self.cd_builder = kd_solver(cop_fraction=cop_fraction)
         self.sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),)))
         self.sqp_osqp = CDSQP(CDSQPConfig(qpsol="osqp")) if with_osqp else None
         self.ad3 = AD3()

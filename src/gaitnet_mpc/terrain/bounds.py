@@ -58,12 +58,13 @@ def reachable_foothold_bounds(
     reach_x_m: float = 0.12,
     reach_y_m: float = 0.25,
     margin_m: float = 0.03,
+    margin_y_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int | None]:
     """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step preview).
 
     The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
     (the hip is above it). Among the ``patches`` that allow ``foot``, each shrunk by
-    ``margin_m``, those whose box meets that window are candidates; the one whose part
+    ``margin_m`` (``margin_y_m`` across, default the same), those whose box meets that window are candidates; the one whose part
     inside the window is closest to the nominal foothold ``p_nominal_xy`` wins, and the
     bounds are its whole shrunk box (the window only chooses the patch; the MPC keeps
     the freedom to step beyond it). If no patch meets the window, the patch closest to
@@ -81,7 +82,7 @@ def reachable_foothold_bounds(
     for i, patch in enumerate(patches):
         if not patch.allows(foot):
             continue
-        lo, hi = foothold_box(patch, margin_m)
+        lo, hi = foothold_box(patch, margin_m, margin_y_m)
         box = (max(lo[0], win[0]), min(hi[0], win[1]), max(lo[1], win[2]), min(hi[1], win[3]))
         if box[0] <= box[1] and box[2] <= box[3]:
             dx = max(box[0] - xn, 0.0, xn - box[1])
@@ -97,5 +98,5 @@ def reachable_foothold_bounds(
     if chosen is None:
         return np.array([win[0], win[2], 0.0]), np.array([win[1], win[3], 0.0]), None
     i = chosen[1]
-    lo, hi = foothold_box(patches[i], margin_m)
+    lo, hi = foothold_box(patches[i], margin_m, margin_y_m)
     return lo, hi, i
