@@ -83,7 +83,7 @@ def test_recording_keeps_its_cop_fraction(recording: Recording, tmp_path: Path) 
     assert kd_solver(cop_fraction=0.6).config.kd.toe_m == pytest.approx(
         0.6 * kd_solver().config.kd.toe_m
     )
-    with pytest.raises(ConfigError, match="cop_fraction: got 0.0"):
+    with pytest.raises(ConfigError, match=r"cop_fraction: got 0\.0"):
         RecordingSpec(cop_fraction=0.0)
 
 
