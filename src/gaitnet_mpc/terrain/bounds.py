@@ -65,9 +65,9 @@ def reachable_foothold_bounds(
     The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
     (the hip is above it). Among the ``patches`` that allow ``foot``, each shrunk by
     ``margin_m`` (``margin_y_m`` across, default the same), those whose box meets that
-    window are candidates; the one whose part inside the window is closest to the nominal foothold ``p_nominal_xy`` wins, and the
-    bounds are its whole shrunk box (the window only chooses the patch; the MPC keeps
-    the freedom to step beyond it). If no patch meets the window, the patch closest to
+    window are candidates; the one whose part inside the window is closest to the
+    nominal foothold ``p_nominal_xy`` wins, and the bounds are its whole shrunk box (the
+    window only chooses the patch; the MPC keeps the freedom to step beyond it). If no patch meets the window, the patch closest to
     the window is used.
 
     Returns:
