@@ -67,8 +67,8 @@ def reachable_foothold_bounds(
     ``margin_m`` (``margin_y_m`` across, default the same), those whose box meets that
     window are candidates; the one whose part inside the window is closest to the
     nominal foothold ``p_nominal_xy`` wins, and the bounds are its whole shrunk box (the
-    window only chooses the patch; the MPC keeps the freedom to step beyond it). If no patch meets the window, the patch closest to
-    the window is used.
+    window only chooses the patch; the MPC keeps the freedom to step beyond it). If no
+    patch meets the window, the patch closest to the window is used.
 
     Returns:
         ``(p_min (3,), p_max (3,), patch index or None)``; z bounds are the patch top.
