@@ -131,16 +131,17 @@ def test_cd_sqp_carries_no_solver_state_between_problems(saved: Path) -> None:
 
 
 def test_ad3_reaches_cd_sqps_cost_near_the_proposed_one(saved: Path) -> None:
-    """AD(3)'s 50 rounds on the first recorded problem (the whole foot, as Table II's
-    recording: ``RecordingSpec.cop_fraction`` 1.0) converge to a feasible plan whose eq. 18
+    """AD(3)'s 50 rounds on the first recorded problem give a feasible plan whose eq. 18
     cost is within 1 % of CD-SQP's and within [0.8, 1.05] of the proposed plan's (scored on
-    the same CD problem)."""
+    the same CD problem). Its rate is linear, so Table X's step test often stops it at the
+    round limit: on this recording (the whole foot, as Table II's:
+    ``RecordingSpec.cop_fraction`` 1.0) it converged on 7 of 21 problems, the second and
+    third among them, but not the first (with ``kd``'s 0.6, on none); Table II: 18 %."""
     kd = kd_solver()
     rec = load_problems(saved, 1)[0]
     cd = centroidal_problem(kd, rec.problem)
     assert rec.cop_fraction == 1.0
     res = AD3().solve(cd)
-    assert res.converged
     assert res.n_qps % 3 == 0
     assert max(cd_violation(cd, res.solution).values()) < FEASIBLE
     it = kd.solve(rec.problem).iterate
@@ -148,6 +149,16 @@ def test_ad3_reaches_cd_sqps_cost_near_the_proposed_one(saved: Path) -> None:
     assert 0.8 <= res.cost / cd_cost(cd, plan) <= 1.05
     sqp = CDSQP(CDSQPConfig(qpsol="qpoases", qpsol_options=(("sparse", True),))).solve(cd)
     assert res.cost == pytest.approx(sqp.cost, rel=1e-2)
+
+
+def test_ad3_converges_on_fewer_problems_than_the_proposed_solver(saved: Path) -> None:
+    """Table II's convergence column in small: over the first three recorded problems the
+    proposed solver meets Table X's test on all, AD(3) on at least one but not all."""
+    kd = kd_solver()
+    recs = load_problems(saved, 3)
+    ad3 = [AD3().solve(centroidal_problem(kd, r.problem)).converged for r in recs]
+    assert all(kd.solve(r.problem).converged for r in recs)
+    assert 1 <= sum(ad3) < len(recs)
 
 
 def test_variable_counts_for_h10() -> None:
