@@ -121,7 +121,7 @@ class RecordingSpec:
         cop_fraction: :attr:`KDWalkConfig.cop_fraction` of the recording walk. Default
             1.0, the paper's whole foot, with which Table II's problems were recorded
             (``kd``'s own default, 0.6, slows AD(3)'s convergence: it meets Table X's
-            step test on none of a flat walk's problems, against about 20 % with 1.0).
+            step test on none of a 0.6 s flat walk's 21 problems, on 7 with 1.0).
     """
 
     course: str = "flat"
