@@ -51,7 +51,12 @@ def recording() -> Recording:
 @pytest.fixture(scope="module")
 def saved(recording: Recording, tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("table2") / "problems.npz"
-    return save_problems(path, recording.problems, ["flat"] * len(recording.problems))
+    return save_problems(
+        path,
+        recording.problems,
+        ["flat"] * len(recording.problems),
+        cop_fraction=recording.cop_fraction,
+    )
 
 
 @pytest.fixture(scope="module")

@@ -146,11 +146,13 @@ class RecordingSpec:
 @dataclass(frozen=True)
 class Recording:
     """What one recording run solved: the frozen problems, the closed loop's result of
-    each and the simulation time of each solve [s] (all after ``skip_s``)."""
+    each, the simulation time of each solve [s] (all after ``skip_s``) and the walk's
+    :attr:`RecordingSpec.cop_fraction` (to pass on to :func:`save_problems`)."""
 
     problems: list[KDProblem]
     results: list[SequentialResult]
     times_s: list[float]
+    cop_fraction: float
 
 
 def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording:
@@ -203,6 +205,7 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
         [recorder.problems[i] for i in keep],
         [recorder.results[i] for i in keep],
         [times[i] for i in keep],
+        spec.cop_fraction,
     )
 
 
@@ -271,7 +274,8 @@ def save_problems(
     path: Path | str,
     problems: list[KDProblem],
     courses: list[str] | None = None,
-    cop_fraction: float = 1.0,
+    *,
+    cop_fraction: float,
 ) -> Path:
     """Write ``problems`` (with the name of the course each was recorded on, and the
     recording's :attr:`RecordingSpec.cop_fraction`) to one ``.npz`` (format in the module
@@ -300,7 +304,7 @@ class RecordedProblem:
 
     problem: KDProblem
     course: str
-    cop_fraction: float = 1.0
+    cop_fraction: float
 
 
 def _mapping(arr: Mapping[str, np.ndarray], key: str) -> dict[str, np.ndarray]:

@@ -367,9 +367,8 @@ def record_table2_problems(path: Path | str, n_problems: int) -> Path:
 
     n_stones = n_problems // 2
     n_flat = n_problems - n_stones
-    flat = record_problems(RecordingSpec("flat", duration_s=0.3 + n_flat / SOLVES_PER_S + 1.0))[
-        :n_flat
-    ]
+    flat_spec = RecordingSpec("flat", duration_s=0.3 + n_flat / SOLVES_PER_S + 1.0)
+    flat = record_problems(flat_spec)[:n_flat]
     stones: list[KDProblem] = []
     seeds: list[int | None] = [None, *range(MAX_STONE_SEEDS)]
     for seed in seeds:
@@ -382,6 +381,7 @@ def record_table2_problems(path: Path | str, n_problems: int) -> Path:
             preview=True,
             seed=seed,
             stones_only=True,
+            cop_fraction=flat_spec.cop_fraction,
         )
         stones += record_problems(spec)
     stones = stones[:n_stones]
@@ -396,7 +396,7 @@ def record_table2_problems(path: Path | str, n_problems: int) -> Path:
             if i < len(got):
                 problems.append(got[i])
                 courses.append(course)
-    return save_problems(path, problems, courses)
+    return save_problems(path, problems, courses, cop_fraction=flat_spec.cop_fraction)
 
 
 def reproduce_table2(
