@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gaitnet_mpc.bench import (
+from gaitnet_mpc.cli import main
+from gaitnet_mpc.experiments.bench import (
     BenchCase,
     EpisodeSpec,
     _combine,
@@ -16,7 +17,6 @@ from gaitnet_mpc.bench import (
     rss_mb,
     timed_episode,
 )
-from gaitnet_mpc.cli import main
 
 SPEC = EpisodeSpec(seconds=0.5)
 

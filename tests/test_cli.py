@@ -160,9 +160,9 @@ def test_viewer_with_an_unreachable_display_fails_fast(
 
 
 def test_subcommands_parse() -> None:
-    from gaitnet_mpc.cli import _build_parser
+    from gaitnet_mpc.cli import build_parser
 
-    parser = _build_parser()
+    parser = build_parser()
     args = parser.parse_args(["plot", "runs/a"])
     assert args.cmd == "plot" and args.run_dir == Path("runs/a")
     args = parser.parse_args(["compare", "runs/a", "runs/b", "--out", "cmp"])

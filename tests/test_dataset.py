@@ -16,9 +16,9 @@ import pytest
 from gaitnet_mpc.cli import main
 from gaitnet_mpc.dataset import FEATURE_NAMES, CollectProtocol, DatasetError
 from gaitnet_mpc.dataset.check import check_dataset
-from gaitnet_mpc.dataset.collect import CollectOptions, collect
 from gaitnet_mpc.dataset.store import MANIFEST, folder_lock
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.experiments.collect import CollectOptions, collect
 
 KD_BIPED = ["--robot", "biped2d", "--teacher", "kd", "--no-progress"]
 

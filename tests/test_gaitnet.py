@@ -196,23 +196,24 @@ def test_each_step_starts_its_iterations_from_the_nominal_dt(humanoid, carry_dt:
     from dataclasses import replace
 
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController
+    from gaitnet_mpc.control.kd_walk import KDWalkController
     from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
     from gaitnet_mpc.control.terrain_view import TerrainView
+    from gaitnet_mpc.gaitnet.policy import GaitNetDt
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
     course, command = load_course("flat"), Command(0.5)
     config = replace(KDWalkConfig(), carry_dt=carry_dt)
-    net = _ConstantNet(0.06)
-    ctrl = GaitNetWalkController(humanoid, TerrainView(course), command, net, config)  # type: ignore[arg-type]
+    policy = GaitNetDt(_ConstantNet(0.06), planar=False)  # type: ignore[arg-type]
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, policy, config)
     sim = Simulator(humanoid, course)
     state = sim.state()
     ctrl.reset(state)
     while state.t_s < 1.0:
         sim.step(ctrl.compute(state))
         state = sim.state()
-    starts = [d.start_dt_s for d in ctrl.policy.decisions]
+    starts = [d.start_dt_s for d in policy.decisions]
     assert len(starts) >= 3
     assert all(d.dts_s[-1] == pytest.approx(0.06) for d in ctrl.policy.decisions)
     expected = [0.045] + [0.06 if carry_dt else 0.045] * (len(starts) - 1)
@@ -273,8 +274,8 @@ def test_oracle_keeps_the_converged_plan_of_lowest_cost(biped):
     paper's 2-D bounds and kept the dt of lowest eq. 18 cost among converged plans; the
     robot walks."""
     from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.oracle_walk import paper_grid_s
     from gaitnet_mpc.control.registry import ControllerContext, make_controller
+    from gaitnet_mpc.dt_policy import oracle_grid_s, paper_dt_bounds_s
     from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
@@ -283,7 +284,7 @@ def test_oracle_keeps_the_converged_plan_of_lowest_cost(biped):
     ctrl = make_controller("oracle", ControllerContext(biped, course, command))
     summary = run_episode(Simulator(biped, course), ctrl, command, 2.0, progress=False)
     assert not summary["fell"], summary["fall_reason"]
-    grid = paper_grid_s(True)
+    grid = oracle_grid_s(paper_dt_bounds_s(planar=True))
     steps = summary["dt_policy"]["steps"]
     assert len(steps) == len(summary["step_durations_s"]) >= 5
     for d in steps:

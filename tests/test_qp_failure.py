@@ -50,7 +50,7 @@ def test_failed_qp_keeps_last_plan_and_is_counted(
     course = load_course("flat")
     command = Command(VX_MPS)
     config = controller_config(controller, robot.spec.planar)
-    ctrl = make_controller(controller, ControllerContext(robot, course, command, {}, config))
+    ctrl = make_controller(controller, ControllerContext(robot, course, command, config))
     backend = BACKENDS[_backend_name(controller, config)]
     real_solve = backend._solve
     window = {"on": False, "calls": 0}

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from gaitnet_mpc import cli
 from gaitnet_mpc.cli import main
+from gaitnet_mpc.cli import run as run_cli
 from gaitnet_mpc.errors import ConfigError
 
 
@@ -70,15 +70,15 @@ def test_help_bounds_agree_with_the_code() -> None:
     """The numbers ``--help`` states are the ones the code uses."""
     from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.walking import WalkingConfig
+    from gaitnet_mpc.dt_policy import NOMINAL_DT_S
     from gaitnet_mpc.gait.step_durations import StepDurations
     from gaitnet_mpc.mpc.sequential import FixedDt
-    from gaitnet_mpc.runner.episode import CAMERAS
 
-    assert cli.DEFAULT_DT_S == FixedDt().dt_s == WalkingConfig().dt_s == StepDurations().dt_s
-    assert cli.CAMERAS == CAMERAS
-    Command(cli.VX_MAX_MPS, cli.VY_MAX_MPS, cli.YAW_RATE_MAX_RADPS)  # at the bound: accepted
+    assert run_cli.DEFAULT_DT_S == FixedDt().dt_s == WalkingConfig().dt_s == StepDurations().dt_s
+    assert run_cli.DEFAULT_DT_S == NOMINAL_DT_S
+    Command(run_cli.VX_MAX_MPS, run_cli.VY_MAX_MPS, run_cli.YAW_RATE_MAX_RADPS)  # accepted
     with pytest.raises(ConfigError):
-        Command(cli.VX_MAX_MPS + 1e-6)
+        Command(run_cli.VX_MAX_MPS + 1e-6)
 
 
 # ----------------------------------------------------------------------------- warnings
@@ -141,17 +141,17 @@ def _summary(**over: Any) -> dict[str, Any]:
 
 
 def test_outcome_line_says_ok_not_upright_fell_or_interrupted() -> None:
-    ok = cli._outcome_line(_summary())
+    ok = run_cli.outcome_line(_summary())
     assert ok.startswith("OK: 0.50 m in 2.00 s, 1 foothold violations")
     assert "final tilt 0.10 rad" in ok and "final CoM height 0.550 m (0.5 cm below" in ok
-    tilted = cli._outcome_line(
+    tilted = run_cli.outcome_line(
         _summary(ended_upright=False, final_tilt_rad=0.8, final_com_height_m=0.395)
     )
     assert tilted.startswith("NOT UPRIGHT at the end (t = 2.000 s")
     assert "final tilt 0.80 rad" in tilted and "16.0 cm below the start" in tilted
-    fell = cli._outcome_line(_summary(fell=True, fall_time_s=1.25, fall_reason="tilt"))
+    fell = run_cli.outcome_line(_summary(fell=True, fall_time_s=1.25, fall_reason="tilt"))
     assert fell.startswith("FELL at t = 1.250 s (tilt)")
-    stopped = cli._outcome_line(_summary(interrupted=True, fell=True, fall_time_s=1.0))
+    stopped = run_cli.outcome_line(_summary(interrupted=True, fell=True, fall_time_s=1.0))
     assert stopped.startswith("INTERRUPTED at t = 2.000 s")
 
 

@@ -331,10 +331,15 @@ def test_lateral_offset_from_the_path_decays(humanoid) -> None:
     assert abs(offset[None]) > 2 * abs(offset[0.5])
 
 
-def test_sequential_config_rejects_bad_relaxation() -> None:
+def test_sequential_config_rejects_bad_settings() -> None:
     from gaitnet_mpc.errors import ConfigError
     from gaitnet_mpc.mpc.sequential import SequentialConfig
 
-    for kwargs in ({"relax_step": 0.0}, {"relax_step": 1.5}, {"relax_after_qps": 0}):
+    for kwargs in (
+        {"j_max": 0},
+        {"dt_bounds_s": (0.07, 0.045)},
+        {"dt_bounds_s": (0.0, 0.07)},
+        {"dt_tolerance_s": -1e-4},
+    ):
         with pytest.raises(ConfigError, match=next(iter(kwargs))):
-            SequentialConfig(**kwargs)
+            SequentialConfig(**kwargs)  # type: ignore[arg-type]

@@ -49,7 +49,7 @@ def test_one_second_without_fall_or_divergence(
     course = load_course(course_name)
     command = Command() if controller == "stand" else Command(WALK_VX_MPS)
     config = controller_config(controller, robot.spec.planar)
-    ctrl = make_controller(controller, ControllerContext(robot, course, command, {}, config))
+    ctrl = make_controller(controller, ControllerContext(robot, course, command, config))
     sim = Simulator(robot, course)
 
     summary = run_episode(sim, ctrl, command, DURATION_S, progress=False)

@@ -54,7 +54,9 @@ def test_humanoid_steps_in_closed_loop(humanoid) -> None:
     fall, it steps (both feet touch down) and moves forward."""
     course = load_course("flat")
     command = Command(vx_mps=0.5)
-    ctx = ControllerContext(humanoid, course, command, {"dt_s": 0.045})
+    ctx = ControllerContext(
+        humanoid, course, command, controller_config("wbmpc", False, dt_s=0.045)
+    )
     ctrl = make_controller("wbmpc", ctx)
     summary = run_episode(Simulator(humanoid, course), ctrl, command, 1.5, progress=False)
     assert not summary["fell"]

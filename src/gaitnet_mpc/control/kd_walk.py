@@ -1,24 +1,28 @@
-"""``kd``: walking with the implicit kino-dynamic sequential MPC (paper Sec. IV-B).
+"""``kd``, ``gaitnet``, ``oracle``: walking with the implicit kino-dynamic sequential MPC
+(paper Sec. IV-B), the three differing only in the dt policy of ``KDWalkConfig.dt_policy``.
 
-At each step start the dt policy (here a fixed dt; Gait-Net later) sets the step's MPC
-sampling time and the full sequential solve runs (Algorithm 1, up to ``j_max`` QPs);
-during the step the same dt is kept and the MPC replans every ``replan_period_s`` (at
-least once per stage, Remark 4). The footholds the MPC chooses are the swing targets of
-the low-level controller; the next touchdown is bounded by the one-step terrain preview
-(eq. 24). With ``KDWalkConfig.preview`` set, the patch of that touchdown and the CoM path
-along the course come instead from a multi-step LIP footstep plan, re-made at every solve
-(:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
+At each step start the dt policy (a fixed dt for ``kd``; Gait-Net from the state and the
+iterate's touchdown for ``gaitnet``, Algorithm 1 line 8; a grid search for ``oracle``)
+sets the step's MPC sampling time and the full sequential solve runs (Algorithm 1, up to
+``j_max`` QPs); during the step the same dt is kept and the MPC replans every
+``replan_period_s`` (at least once per stage, Remark 4). The footholds the MPC chooses
+are the swing targets of the low-level controller; the next touchdown is bounded by the
+one-step terrain preview (eq. 24). With ``KDWalkConfig.preview`` set, the patch of that
+touchdown and the CoM path along the course come instead from a multi-step LIP footstep
+plan, re-made at every solve (:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import MomentumPrediction
+from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
@@ -32,8 +36,10 @@ from gaitnet_mpc.gait import (
 )
 from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
 from gaitnet_mpc.gait.preview import PreviewPlan, plan_preview
+from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.geometry import heading_axes
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
+from gaitnet_mpc.mpc.dt_oracle import OracleDt
 from gaitnet_mpc.mpc.sequential import (
     CoMReference,
     DtPolicy,
@@ -59,10 +65,16 @@ def _kd_raibert(planar: bool) -> RaibertHeuristic:
     )
 
 
-class KDWalkController(WalkingBase):
-    """Sequential implicit kino-dynamic MPC + gait schedule + low-level control."""
+#: The controller name of each dt policy kind.
+CONTROLLER_OF_POLICY = {"fixed": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
 
-    name = "kd"
+
+class KDWalkController(WalkingBase):
+    """Sequential implicit kino-dynamic MPC + gait schedule + low-level control.
+
+    ``dt_policy``: the policy that sets each step's dt; None: the one
+    ``config.dt_policy`` names (:func:`~gaitnet_mpc.control.dt_policies.make_dt_policy`).
+    """
 
     def __init__(
         self,
@@ -86,7 +98,12 @@ class KDWalkController(WalkingBase):
                 robot.min_foot_separation_m if self.config.keep_feet_apart else None
             ),
         )
-        self.mpc = SequentialKDMPC(robot, replace(self.config.sequential, kd=kd), dt_policy)
+        sequential = replace(self.config.sequential, kd=kd)
+        if dt_policy is None:
+            dt_policy = make_dt_policy(self.config.dt_policy, robot, sequential)
+        self.name = CONTROLLER_OF_POLICY[self.config.dt_policy.kind]
+        self.dt_policy = dt_policy
+        self.mpc = SequentialKDMPC(robot, sequential, dt_policy)
         schedule = GaitScheduleConfig(
             default_dt_s=self.mpc.dt_policy.nominal_dt_s,
             dt_bounds_s=self.config.sequential.dt_bounds_s,
@@ -113,6 +130,16 @@ class KDWalkController(WalkingBase):
             return None
         t_pred = plan.t_plan_s + float(plan.dts_s[0])
         return MomentumPrediction(plan.t_plan_s, t_pred, plan.last_step.states[1, 6:12].copy())
+
+    def last_dt_decision(self) -> dict[str, Any] | None:
+        policy = self.dt_policy
+        if isinstance(policy, GaitNetDt | OracleDt) and policy.decisions:
+            return policy.decisions[-1].to_dict()
+        return None
+
+    def dt_policy_summary(self) -> dict[str, Any] | None:
+        policy = self.dt_policy
+        return policy.summary() if isinstance(policy, GaitNetDt | OracleDt) else None
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
@@ -153,13 +180,9 @@ class KDWalkController(WalkingBase):
         return p
 
     def _path_start(self, state: RobotState) -> np.ndarray:
-        """Start of the reference CoM path: the measured CoM moved toward the commanded
-        path by at most ``max_path_error_m``, so that drift is corrected without a
-        wind-up."""
-        lim = self.config.max_path_error_m
-        out = state.com_world_m.copy()
-        out[:2] += np.clip(self._commanded_path_xy(state.t_s) - out[:2], -lim, lim)
-        return out
+        """Start of the reference CoM path: the measured CoM (the pull back to the
+        commanded path is ``lateral_return_time_s``'s)."""
+        return state.com_world_m.copy()
 
     def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, FootholdBox]:
         """Eq. 24 box for the swing foot's next touchdown.

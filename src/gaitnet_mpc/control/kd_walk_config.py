@@ -13,6 +13,7 @@ import numpy as np
 from gaitnet_mpc.config import load_preset, preset_names
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
+from gaitnet_mpc.dt_policy import DtPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import SwingConfig
 from gaitnet_mpc.gait.preview import PreviewConfig
@@ -79,9 +80,6 @@ class KDWalkConfig:
     swing: SwingConfig = field(
         default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
     )
-    # Clamp of the CoM path correction [m]; 0 turns it off. Measured (flat, 0.75 m/s, 20 s):
-    # with 0.05 m the robot fell at 17.2 s; without it, no fall but 1.1 m lateral drift.
-    max_path_error_m: float = 0.0
     # Eq. 24 boxes shrink by this inside each patch: the whole foot (toe and heel 0.075 m
     # from its centre) on the patch, plus 5 mm for the landing error (within +-4 mm with
     # the swing feedforward). With 0.05 the heel or toe overhung an edge and the foot
@@ -137,6 +135,9 @@ class KDWalkConfig:
     # (f_ref with "a nominal sampling duration dt^0"); True: the dt the previous step
     # chose.
     carry_dt: bool = False
+    # Which policy chooses each step's dt (fixed, gaitnet, oracle) and its settings; the
+    # controller's name sets ``kind`` (gaitnet_mpc/dt_policy.py owns the numbers).
+    dt_policy: DtPolicyConfig = field(default_factory=DtPolicyConfig)
 
     def __post_init__(self) -> None:
         j = self.replan_j_max

@@ -4,7 +4,7 @@ the controller's settings (a dataclass tree) from a preset, a TOML file and over
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -19,24 +19,20 @@ from gaitnet_mpc.terrain import Course
 @dataclass(frozen=True)
 class ControllerContext:
     """What a controller factory may use: the robot model, the course (handed to a walking
-    controller only through a :class:`TerrainView`), the velocity command, options and the
-    controller's settings.
-
-    ``options``: ``dt_s`` (kd: the fixed MPC sampling time of its dt policy; srbm, wbmpc:
-    their fixed dt when ``config`` is None), and when ``config`` is None ``preset`` and
-    ``preview`` (see :func:`controller_config`). ``config``: the settings dataclass
-    (``KDWalkConfig``, ``SRBMWalkConfig``); None: made by :func:`controller_config`.
-    """
+    controller only through a :class:`TerrainView`), the velocity command and the
+    controller's settings (``KDWalkConfig``, ``SRBMWalkConfig``, ``WBWalkConfig``; None:
+    the defaults of :func:`controller_config`)."""
 
     robot: RobotModel
     course: Course
     command: Any
-    options: dict[str, Any] = field(default_factory=dict)
     config: Any = None
 
 
-#: The controllers that are ``kd`` with another dt policy: the same settings and presets.
+#: The controllers that are ``kd`` with another dt policy: the same settings and presets,
+#: and the ``KDWalkConfig.dt_policy.kind`` each name sets.
 KD_FAMILY = ("kd", "gaitnet", "oracle")
+POLICY_OF_CONTROLLER = {"kd": "fixed", "gaitnet": "gaitnet", "oracle": "oracle"}
 
 
 def config_type(name: str) -> type | None:
@@ -64,12 +60,15 @@ def controller_config(
     config_file: str | Path | None = None,
     preview: bool = False,
     dt_s: float | None = None,
+    gaitnet_weights: str | None = None,
     overrides: Sequence[str] = (),
 ) -> Any:
     """The settings of controller ``name``, in this order: the preset file (default
-    "default"; robot-dependent through ``planar``), ``config_file``, the flags (kd
-    ``preview``: the multi-step footstep preview; srbm ``dt_s``), then ``overrides``
-    (``KEY=VALUE`` items of ``--set``). None for a controller without settings.
+    "default"; robot-dependent through ``planar``), for the kd family the dt policy the
+    name stands for, ``config_file``, the flags (kd family ``preview``: the multi-step
+    footstep preview; ``dt_s``: the fixed dt of kd, srbm and wbmpc; gaitnet
+    ``gaitnet_weights``), then ``overrides`` (``KEY=VALUE`` items of ``--set``). None for
+    a controller without settings.
 
     Raises:
         ConfigError: naming the option or the full key, before anything is simulated.
@@ -88,32 +87,44 @@ def controller_config(
         return None
     preset_of = "kd" if name in KD_FAMILY else name
     config = configio.load_preset(cls, preset_of, preset or "default", planar)
+    if name in KD_FAMILY:
+        kind = POLICY_OF_CONTROLLER[name]
+        config = replace(config, dt_policy=replace(config.dt_policy, kind=kind))
     if config_file is not None:
         config = configio.apply(config, configio.read_toml(config_file), f"{config_file}: ")
     if preview and config.preview is None:
         from gaitnet_mpc.control.kd_walk_config import preview_walk_config
 
         config = preview_walk_config(config)
-    if dt_s is not None and name == "srbm":
-        config = replace(config, dt_s=dt_s)
-    if dt_s is not None and name == "wbmpc":
-        config = replace(config, step_durations=replace(config.step_durations, dt_s=dt_s))
+    if dt_s is not None:
+        if name == "kd":
+            config = replace(config, dt_policy=replace(config.dt_policy, dt_s=dt_s))
+        elif name == "srbm":
+            config = replace(config, dt_s=dt_s)
+        elif name == "wbmpc":
+            config = replace(config, step_durations=replace(config.step_durations, dt_s=dt_s))
+    if gaitnet_weights is not None:
+        if name != "gaitnet":
+            raise ConfigError("--gaitnet-weights", gaitnet_weights, "--controller gaitnet")
+        config = replace(
+            config, dt_policy=replace(config.dt_policy, gaitnet_weights=gaitnet_weights)
+        )
     if overrides:
         config = configio.apply(config, configio.parse_overrides(overrides), "--set ")
+    if name in KD_FAMILY and config.dt_policy.kind != POLICY_OF_CONTROLLER[name]:
+        raise ConfigError(
+            "dt_policy.kind",
+            config.dt_policy.kind,
+            f"{POLICY_OF_CONTROLLER[name]!r} for --controller {name} (the controller's name "
+            "chooses the dt policy)",
+        )
     return config
 
 
 def _config(name: str, ctx: ControllerContext) -> Any:
     if ctx.config is not None:
         return ctx.config
-    options = ctx.options
-    return controller_config(
-        name,
-        ctx.robot.spec.planar,
-        preset=options.get("preset"),
-        preview=bool(options.get("preview")),
-        dt_s=options.get("dt_s"),
-    )
+    return controller_config(name, ctx.robot.spec.planar)
 
 
 def _stand(ctx: ControllerContext) -> Controller:
@@ -129,38 +140,19 @@ def _srbm(ctx: ControllerContext) -> Controller:
     return SRBMWalkController(ctx.robot, TerrainView(ctx.course), ctx.command, config)
 
 
-def _kd(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import walk_terrain
-    from gaitnet_mpc.mpc.sequential import FixedDt
+def _kd_family(name: str) -> Callable[[ControllerContext], Controller]:
+    """The factory of ``kd``, ``gaitnet`` or ``oracle``: one controller, the dt policy of
+    its settings."""
 
-    dt_s = ctx.options.get("dt_s")
-    policy = FixedDt() if dt_s is None else FixedDt(dt_s)
-    config = _config("kd", ctx)
-    terrain = walk_terrain(ctx.course, config)
-    return KDWalkController(ctx.robot, terrain, ctx.command, dt_policy=policy, config=config)
+    def make(ctx: ControllerContext) -> Controller:
+        from gaitnet_mpc.control.kd_walk import KDWalkController
+        from gaitnet_mpc.control.kd_walk_config import walk_terrain
 
+        config = _config(name, ctx)
+        terrain = walk_terrain(ctx.course, config)
+        return KDWalkController(ctx.robot, terrain, ctx.command, config=config)
 
-def _gaitnet(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController, load_gaitnet
-    from gaitnet_mpc.control.kd_walk_config import walk_terrain
-    from gaitnet_mpc.gaitnet.policy import GaitNetPolicyConfig
-
-    config = _config("gaitnet", ctx)
-    net = load_gaitnet(ctx.robot, ctx.options.get("gaitnet_weights"))
-    terrain = walk_terrain(ctx.course, config)
-    # the paper preset runs Algorithm 1 as printed: no fallbacks, no cap on re-timings
-    policy = GaitNetPolicyConfig(safeguards=ctx.options.get("preset") != "paper")
-    return GaitNetWalkController(ctx.robot, terrain, ctx.command, net, config, policy)
-
-
-def _oracle(ctx: ControllerContext) -> Controller:
-    from gaitnet_mpc.control.kd_walk_config import walk_terrain
-    from gaitnet_mpc.control.oracle_walk import OracleWalkController
-
-    config = _config("oracle", ctx)
-    terrain = walk_terrain(ctx.course, config)
-    return OracleWalkController(ctx.robot, terrain, ctx.command, config)
+    return make
 
 
 def _wbmpc(ctx: ControllerContext) -> Controller:
@@ -171,9 +163,9 @@ def _wbmpc(ctx: ControllerContext) -> Controller:
 
 
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
-    "gaitnet": _gaitnet,
-    "kd": _kd,
-    "oracle": _oracle,
+    "gaitnet": _kd_family("gaitnet"),
+    "kd": _kd_family("kd"),
+    "oracle": _kd_family("oracle"),
     "stand": _stand,
     "srbm": _srbm,
     "wbmpc": _wbmpc,

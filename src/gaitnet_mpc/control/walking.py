@@ -55,6 +55,7 @@ from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking_base import WalkingBase
+from gaitnet_mpc.dt_policy import NOMINAL_DT_S
 from gaitnet_mpc.gait import (
     GaitScheduleConfig,
     LandingBias,
@@ -77,7 +78,7 @@ LATE_DEPTH_M = 0.03
 class WalkingConfig:
     """Settings shared by the walking controllers (gait, footholds, swing, low level)."""
 
-    dt_s: float = 0.045  # MPC stage = 1/5 of a step (step 0.225 s)
+    dt_s: float = NOMINAL_DT_S  # MPC stage = 1/5 of a step [s]
     replan_period_s: float = 0.01
     com_height_m: float | None = None  # walking CoM height; default: reset height + offset
     # Walk with bent knees: at the standing height (knee 0.7 rad) a leg reaching 0.12 m

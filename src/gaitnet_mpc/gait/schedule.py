@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitnet_mpc.dt_policy import ACCEPTED_DT_RANGE_S, NOMINAL_DT_S
 from gaitnet_mpc.errors import ConfigError, GaitNetMPCError
 from gaitnet_mpc.robots.spec import FEET
 
@@ -62,15 +63,15 @@ class GaitScheduleConfig:
         stages_per_step: ``h'``, MPC stages per footstep (one swing) [-].
         horizon_stages: ``h``, MPC stages in the horizon [-] (two steps by default).
         default_dt_s: sampling time of a step whose dt nobody set [s]
-            (0.045 s = 0.225 s step, the paper's nominal value).
+            (:data:`~gaitnet_mpc.dt_policy.NOMINAL_DT_S`).
         dt_bounds_s: (min, max) allowed sampling time [s]; every dt is checked against it.
         first_swing_foot: the foot that swings in step 0 (``"left"`` or ``"right"``).
     """
 
     stages_per_step: int = 5
     horizon_stages: int = 10
-    default_dt_s: float = 0.045
-    dt_bounds_s: tuple[float, float] = (0.03, 0.2)
+    default_dt_s: float = NOMINAL_DT_S
+    dt_bounds_s: tuple[float, float] = ACCEPTED_DT_RANGE_S
     first_swing_foot: str = "right"
 
     def __post_init__(self) -> None:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitnet_mpc.dt_policy import NOMINAL_DT_S
 from gaitnet_mpc.errors import ConfigError
 
 
@@ -29,7 +30,7 @@ class StepDurations:
         seed: seed of the draws.
     """
 
-    dt_s: float = 0.045
+    dt_s: float = NOMINAL_DT_S
     duration_range_s: tuple[float, float] | None = None
     stages_per_step: int = 5
     seed: int = 0

@@ -4,9 +4,9 @@ a fixed-point loop needs.
 At a step start every sequential iteration asks the policy for the step's dt. The policy
 builds the features of the step start (:func:`~gaitnet_mpc.dataset.step_features.step_features`)
 from the measured state and the iterate's planned touchdown of the swing foot, and returns
-the network's dt, clipped into the paper's bounds ([0.045, 0.07] s in 3-D, [0.03, 0.06] s
-in 2-D, Sec. V-E1). Three safeguards (paper Sec. VI names the failure: dts that do not
-settle and solves that hit ``j_max``):
+the network's dt, clipped into the paper's bounds of the robot
+(:data:`~gaitnet_mpc.dt_policy.PAPER_DT_BOUNDS_S`, Sec. V-E1). Three safeguards (paper
+Sec. VI names the failure: dts that do not settle and solves that hit ``j_max``):
 
 * **out of distribution**: when the ensemble's spread exceeds ``max_spread_s`` the input
   lies outside what the data taught; the step keeps the previous step's dt (the nominal
@@ -27,60 +27,24 @@ and the fallback reason if any.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from gaitnet_mpc.dataset.step_features import step_features
+from gaitnet_mpc.dt_policy import (
+    NOMINAL_DT_S,
+    GaitNetPolicyConfig,
+    clip_dt,
+    paper_dt_bounds_s,
+)
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.model import GaitNet
 from gaitnet_mpc.mpc.kd_iterate import KDIterate
 from gaitnet_mpc.mpc.sequential import KDProblem, planned_touchdowns
 
-#: Paper Sec. V-E1: dt clipped into [0.045, 0.07] s on the humanoid; Sec. V-C, 2-D: [0.03, 0.06].
-PAPER_DT_BOUNDS_S = {False: (0.045, 0.07), True: (0.03, 0.06)}
 FALLBACKS = ("spread", "cycle")
-
-
-@dataclass(frozen=True)
-class GaitNetPolicyConfig:
-    """Settings of :class:`GaitNetDt`.
-
-    Attributes:
-        dt_bounds_s: (min, max) dt [s]; None: the paper's bounds of the robot.
-        nominal_dt_s: dt of the first step, and the fallback before any step [s].
-        max_spread_s: ensemble spread [s] above which the input counts as unknown.
-        cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
-        max_damped: damped iterations before a cycling solve falls back.
-        safeguards: False: none of the three (the network's clipped dt at every
-            iteration, Algorithm 1 as printed; ``gaitnet --preset paper``).
-        max_retimes: dt changes per step start before the dt is frozen; None: no limit
-            (Algorithm 1 as printed). 2 on tuning gaps: 10/10 without a fall, against
-            6/10 without a limit and 9/10 with 1.
-    """
-
-    dt_bounds_s: tuple[float, float] | None = None
-    nominal_dt_s: float = 0.045
-    max_spread_s: float = 0.006
-    cycle_tolerance_s: float = 5e-4
-    max_damped: int = 3
-    safeguards: bool = True
-    max_retimes: int | None = 2  # chosen on tuning gap seeds 100-109 (gaitnet_runs_tuning.md)
-
-    def __post_init__(self) -> None:
-        b = self.dt_bounds_s
-        if b is not None and not (0.0 < b[0] <= b[1] and math.isfinite(b[1])):
-            raise ConfigError("dt_bounds_s", b, "(min, max) with 0 < min <= max [s]")
-        for name in ("nominal_dt_s", "max_spread_s", "cycle_tolerance_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigError(name, value, "a value > 0")
-        if self.max_damped < 0:
-            raise ConfigError("max_damped", self.max_damped, "an integer >= 0")
-        if self.max_retimes is not None and self.max_retimes < 1:
-            raise ConfigError("max_retimes", self.max_retimes, "None or an integer >= 1")
 
 
 @dataclass
@@ -106,23 +70,44 @@ class Decision:
 
 
 class GaitNetDt:
-    """Gait-Net in the dt-policy slot of :class:`~gaitnet_mpc.mpc.sequential.SequentialKDMPC`."""
+    """Gait-Net in the dt-policy slot of :class:`~gaitnet_mpc.mpc.sequential.SequentialKDMPC`.
+
+    Args:
+        net: the network.
+        planar: the robot kind, for the paper's bounds when ``bounds_s`` is None.
+        config: the safeguards.
+        bounds_s: (min, max) of a chosen dt [s]; None: the paper's bounds of the robot.
+        nominal_dt_s: dt of the first step, and the fallback before any step [s].
+    """
 
     def __init__(
-        self, net: GaitNet, planar: bool, config: GaitNetPolicyConfig | None = None
+        self,
+        net: GaitNet,
+        planar: bool,
+        config: GaitNetPolicyConfig | None = None,
+        *,
+        bounds_s: tuple[float, float] | None = None,
+        nominal_dt_s: float = NOMINAL_DT_S,
     ) -> None:
         self.net = net
         self.config = config or GaitNetPolicyConfig()
-        self.bounds_s = self.config.dt_bounds_s or PAPER_DT_BOUNDS_S[planar]
+        self.bounds_s = bounds_s or paper_dt_bounds_s(planar)
+        self._nominal_dt_s = nominal_dt_s
         from gaitnet_mpc.dataset.schema import FEATURE_NAMES
 
         self._columns = [FEATURE_NAMES.index(n) for n in net.feature_names]
+        self.weights_info = {
+            "teacher": net.spec.teacher,
+            "data_manifest_sha256": net.spec.data_manifest_sha256,
+            "features": list(net.feature_names),
+            "members": net.spec.members,
+        }
         self.decisions: list[Decision] = []
         self._problem: KDProblem | None = None
 
     @property
     def nominal_dt_s(self) -> float:
-        return self.config.nominal_dt_s
+        return self._nominal_dt_s
 
     def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
         if problem.state is None:
@@ -152,17 +137,17 @@ class GaitNetDt:
         )
         dt, spread = self.net.predict(x[self._columns])
         d.spreads_s.append(spread)
-        lo, hi = self.bounds_s
+        bounds = self.bounds_s
         if not self.config.safeguards:
-            return min(max(dt, lo), hi)
+            return clip_dt(dt, bounds)
         if spread > self.config.max_spread_s:
             d.fallback = "spread"
-            return min(max(self._previous_dt_s(), lo), hi)
-        dt = min(max(dt, lo), hi)
+            return clip_dt(self._previous_dt_s(), bounds)
+        dt = clip_dt(dt, bounds)
         if self._cycling([*d.dts_s, dt]):
             if d.damped >= self.config.max_damped:
                 d.fallback = "cycle"
-                return min(max(self._previous_dt_s(), lo), hi)
+                return clip_dt(self._previous_dt_s(), bounds)
             d.damped += 1
             return 0.5 * (d.dts_s[-1] + dt)
         return dt
@@ -170,7 +155,7 @@ class GaitNetDt:
     def _previous_dt_s(self) -> float:
         """The dt the previous step start chose (the nominal dt before the first)."""
         if len(self.decisions) < 2:
-            return self.config.nominal_dt_s
+            return self._nominal_dt_s
         return self.decisions[-2].dts_s[-1]
 
     def _cycling(self, dts: list[float]) -> bool:
@@ -195,4 +180,5 @@ class GaitNetDt:
             "dt_bounds_s": list(self.bounds_s),
             "calls_per_decision_mean": float(np.mean(iters)) if iters else None,
             "steps": [d.to_dict() for d in self.decisions],
+            "weights": self.weights_info,
         }

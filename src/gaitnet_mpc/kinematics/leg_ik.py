@@ -1,5 +1,7 @@
 """Analytic inverse kinematics of the legs (paper Appendix B, eqs. 31-40), vectorised over N.
 
+(Over 500 lines because of this docstring, the derivation of both legs' closed forms.)
+
 5-DoF humanoid leg (``humanoid3d``)
 ===================================
 

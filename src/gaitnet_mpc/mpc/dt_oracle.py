@@ -20,12 +20,13 @@ from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.dt_policy import NOMINAL_DT_S, oracle_grid_s, paper_dt_bounds_s
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.mpc.kd_iterate import KDIterate
 from gaitnet_mpc.mpc.sequential import KDProblem, SequentialKDMPC
 
 #: The grid of the paper's 3-D bounds [0.045, 0.07] s in 5 ms steps.
-DEFAULT_GRID_S = (0.045, 0.05, 0.055, 0.06, 0.065, 0.07)
+DEFAULT_GRID_S = oracle_grid_s(paper_dt_bounds_s(planar=False))
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ class OracleConfig:
     """
 
     dts_s: tuple[float, ...] = DEFAULT_GRID_S
-    nominal_dt_s: float = 0.045
+    nominal_dt_s: float = NOMINAL_DT_S
 
     def __post_init__(self) -> None:
         d = np.asarray(self.dts_s, dtype=float)

@@ -29,6 +29,7 @@ from typing import Protocol
 import numpy as np
 
 from gaitnet_mpc.command import Command
+from gaitnet_mpc.dt_policy import ACCEPTED_DT_RANGE_S, NOMINAL_DT_S, check_bounds
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import centroidal_map_euler, euler_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
@@ -144,7 +145,7 @@ class DtPolicy(Protocol):
 class FixedDt:
     """The paper's baseline 1 (Fig. 6a): the same dt for every step."""
 
-    dt_s: float = 0.045
+    dt_s: float = NOMINAL_DT_S
 
     @property
     def nominal_dt_s(self) -> float:
@@ -187,30 +188,15 @@ class SequentialConfig:
     kd: KDConfig = field(default_factory=KDConfig)
     update_foot_reference: bool = True  # Alg. 1 line 9 re-makes p_f_ref from the iterate
     linear_reference_from_command: bool = True
-    # From QP number ``relax_after_qps`` + 1 on, apply ``relax_step`` times the search
-    # direction (under-relaxation of the fixed-point iteration, which can cycle). None:
-    # full steps always (Algorithm 1 as printed, the default). Measured with 8 and 0.5
-    # (benchmarks/kd_runs.py): solves hitting j_max biped2d 16 % -> 8 %, humanoid3d flat
-    # 3 % -> 1 %, but the 20 s flat humanoid run then fell at 16.2 s (it does not without),
-    # so it stays off.
-    relax_after_qps: int | None = None
-    relax_step: float = 0.5
     # The dt policy's output is clipped into these bounds [s] (GaitScheduleConfig's), and a
     # change smaller than ``dt_tolerance_s`` is not applied (the references stay as they are).
-    dt_bounds_s: tuple[float, float] = (0.03, 0.2)
+    dt_bounds_s: tuple[float, float] = ACCEPTED_DT_RANGE_S
     dt_tolerance_s: float = 1e-4
 
     def __post_init__(self) -> None:
         if not isinstance(self.j_max, int) or self.j_max < 1:
             raise ConfigError("j_max", self.j_max, "an integer >= 1")
-        n = self.relax_after_qps
-        if n is not None and (not isinstance(n, int) or n < 1):
-            raise ConfigError("relax_after_qps", n, "None or an integer >= 1")
-        if not 0.0 < self.relax_step <= 1.0:
-            raise ConfigError("relax_step", self.relax_step, "a step fraction in (0, 1]")
-        lo, hi = self.dt_bounds_s
-        if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo <= hi):
-            raise ConfigError("dt_bounds_s", self.dt_bounds_s, "(min, max) with 0 < min <= max [s]")
+        check_bounds("dt_bounds_s", self.dt_bounds_s)
         if not (math.isfinite(self.dt_tolerance_s) and self.dt_tolerance_s >= 0.0):
             raise ConfigError("dt_tolerance_s", self.dt_tolerance_s, "a finite time >= 0 s")
 
@@ -391,10 +377,7 @@ class SequentialKDMPC:
             )
             step = sub.solve(iterate, inputs)
             n_qps += 1
-            alpha = 1.0
-            if cfg.relax_after_qps is not None and n_qps > cfg.relax_after_qps:
-                alpha = cfg.relax_step
-            iterate = iterate.apply(step, alpha)
+            iterate = iterate.apply(step, 1.0)
             retimed = False
             if problem.choose_dt:
                 dt_new = self._next_dt(problem, iterate, dt)

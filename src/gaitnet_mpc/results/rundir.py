@@ -1,11 +1,13 @@
 """Reading a run folder and writing result files atomically.
 
 A run folder (written by ``gaitnet-mpc run``, see :mod:`gaitnet_mpc.runner.episode`) holds
-``summary.json``, ``log.csv`` (one row per control tick), ``mpc_log.csv`` (one row per MPC
-solve, MPC controllers only), ``course.json``, ``config.toml`` (the controller's settings,
-controllers with settings only, see :mod:`gaitnet_mpc.config`), ``video.mp4`` and
-``plots/``. Everything
-here reads only those files, so plots and comparisons can be re-made at any time.
+``summary.json`` (what happened: deterministic, so a replay of ``scenario.toml`` writes the
+same file), ``timing.json`` (the wall-clock figures of this machine: solve times,
+real-time factor), ``scenario.toml`` (the run, replayable), ``log.csv`` (one row per
+control tick), ``mpc_log.csv`` (one row per MPC solve, MPC controllers only),
+``course.json``, ``config.toml`` (the controller's settings, controllers with settings
+only, see :mod:`gaitnet_mpc.config`), ``video.mp4`` and ``plots/``. Everything here reads
+only those files, so plots and comparisons can be re-made at any time.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from gaitnet_mpc.errors import ConfigError, CourseFormatError
 from gaitnet_mpc.terrain import Course
 
 SUMMARY = "summary.json"
+TIMING = "timing.json"
+SCENARIO = "scenario.toml"
 LOG = "log.csv"
 MPC_LOG = "mpc_log.csv"
 EVENTS = "events.csv"
@@ -31,6 +35,30 @@ COURSE = "course.json"
 CONFIG = "config.toml"
 VIDEO = "video.mp4"
 PLOTS_DIR = "plots"
+
+
+#: Top-level ``summary`` keys that are wall-clock figures (``timing.json``); in the
+#: ``mpc`` block, every key with ``_ms_`` in it is one too.
+TIMING_KEYS = ("wall_time_s", "render_time_s", "realtime_factor")
+
+
+def split_timing(summary: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``summary`` as (``summary.json``: without wall-clock figures, ``timing.json``)."""
+    facts = {k: v for k, v in summary.items() if k not in TIMING_KEYS}
+    timing = {k: summary[k] for k in TIMING_KEYS if k in summary}
+    mpc = summary.get("mpc")
+    if isinstance(mpc, dict):
+        facts["mpc"] = {k: v for k, v in mpc.items() if "_ms_" not in k}
+        timing["mpc"] = {k: v for k, v in mpc.items() if "_ms_" in k}
+    return facts, timing
+
+
+def merge_timing(facts: dict[str, Any], timing: dict[str, Any]) -> dict[str, Any]:
+    """The whole summary again from :func:`split_timing`'s two parts."""
+    out = {**facts, **{k: v for k, v in timing.items() if k != "mpc"}}
+    if isinstance(facts.get("mpc"), dict) and isinstance(timing.get("mpc"), dict):
+        out["mpc"] = {**facts["mpc"], **timing["mpc"]}
+    return out
 
 
 def read_csv_columns(path: str | Path) -> dict[str, np.ndarray]:
@@ -101,6 +129,13 @@ def load_run(path: str | Path) -> RunFolder:
         raise ConfigError(str(root / SUMMARY), "invalid JSON", f"valid JSON ({exc})") from exc
     if not isinstance(summary, dict):
         raise ConfigError(str(root / SUMMARY), type(summary).__name__, "a JSON object")
+    if (root / TIMING).is_file():
+        try:
+            timing = json.loads((root / TIMING).read_text())
+        except json.JSONDecodeError as exc:
+            raise ConfigError(str(root / TIMING), "invalid JSON", f"valid JSON ({exc})") from exc
+        if isinstance(timing, dict):
+            summary = merge_timing(summary, timing)
     log = read_csv_columns(root / LOG)
     mpc_log = read_csv_columns(root / MPC_LOG) if (root / MPC_LOG).is_file() else None
     course = None
@@ -129,7 +164,19 @@ def save_figure_atomic(fig: Any, path: str | Path, dpi: int = 110) -> Path:
 
 
 #: Files and folders a run writes into its run folder (``--overwrite`` removes these).
-RUN_ARTIFACTS = (SUMMARY, LOG, MPC_LOG, EVENTS, COURSE, CONFIG, VIDEO, "video.part.mp4", PLOTS_DIR)
+RUN_ARTIFACTS = (
+    SUMMARY,
+    TIMING,
+    SCENARIO,
+    LOG,
+    MPC_LOG,
+    EVENTS,
+    COURSE,
+    CONFIG,
+    VIDEO,
+    "video.part.mp4",
+    PLOTS_DIR,
+)
 #: Files ``compare`` writes into its output folder.
 COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
 

@@ -3,7 +3,9 @@
 The run folder that :func:`run_episode` writes (plots are made afterwards from these files
 by :mod:`gaitnet_mpc.results.plots`):
 
-* ``summary.json``: episode outcome and statistics (see :func:`_summarise`).
+* ``summary.json``: episode outcome and statistics (see :func:`_summarise`), without the
+  wall-clock figures, which go to ``timing.json``
+  (:func:`~gaitnet_mpc.results.rundir.split_timing`); the returned summary has both.
 * ``log.csv``: one row per control tick (:class:`EpisodeLog`).
 * ``mpc_log.csv``: one row per MPC solve (:class:`MPCLog`); only for MPC controllers.
 * ``events.csv``: touchdowns, lift-offs, slips, pivots and scuffs of the feet
@@ -37,6 +39,7 @@ from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.results.events import EventRecorder
 from gaitnet_mpc.results.io import write_atomic, write_json_atomic
+from gaitnet_mpc.results.rundir import SUMMARY, TIMING, split_timing
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.logs import H_COLS, EpisodeLog, TelemetryRecorder
 from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
@@ -305,7 +308,9 @@ def run_episode(
         write_json_atomic(out / "course.json", sim.course.to_dict())
         if tmp_video is not None:
             tmp_video.replace(out / "video.mp4")
-        write_json_atomic(out / "summary.json", summary)
+        facts, timing = split_timing(summary)
+        write_json_atomic(out / TIMING, timing)
+        write_json_atomic(out / SUMMARY, facts)
     return summary
 
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitnet_mpc.dt_policy import paper_dt_bounds_s
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.reference import make_reference
 from gaitnet_mpc.mpc.sequential import KDProblem, SequentialKDMPC
@@ -35,7 +36,7 @@ from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.table2.cd_problem import CDProblem, centroidal_problem
 
 #: Table VI's range of the MPC sampling time [s] (the variable-dt baselines' bounds).
-DT_BOUNDS_S = (0.045, 0.07)
+DT_BOUNDS_S = paper_dt_bounds_s(planar=False)
 
 
 class SymbolicKinematics:

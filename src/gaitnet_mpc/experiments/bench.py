@@ -139,9 +139,30 @@ def build_case(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any]:
     Raises:
         ConfigError: an unknown controller or a bad override.
     """
+    from gaitnet_mpc.control.registry import KD_FAMILY
+
+    if case.controller not in KD_FAMILY:
+        raise ConfigError("bench controller", case.controller, f"one of {KD_FAMILY}")
+    try:
+        from gaitnet_mpc.scenario import build_episode, make_scenario
+    except ImportError:  # a --baseline revision from before the scenario API (2026-12)
+        return _build_case_before_scenarios(case, spec)
+    scenario = make_scenario(
+        robot=spec.robot,
+        controller=case.controller,
+        course=spec.course,
+        vx_mps=spec.vx_mps,
+        duration_s=spec.seconds,
+        overrides=tuple(case.overrides),
+    )
+    episode = build_episode(scenario)
+    return episode.sim, episode.controller
+
+
+def _build_case_before_scenarios(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any]:
+    """:func:`build_case` with the package of a revision that has no ``scenario`` module."""
     from gaitnet_mpc.command import Command
     from gaitnet_mpc.control.registry import (
-        KD_FAMILY,
         ControllerContext,
         controller_config,
         make_controller,
@@ -150,13 +171,9 @@ def build_case(case: BenchCase, spec: EpisodeSpec) -> tuple[Any, Any]:
     from gaitnet_mpc.sim.simulator import Simulator
     from gaitnet_mpc.terrain import load_course
 
-    if case.controller not in KD_FAMILY:
-        raise ConfigError("bench controller", case.controller, f"one of {KD_FAMILY}")
-    robot = load_robot(spec.robot)
-    course = load_course(spec.course)
-    command = Command(vx_mps=spec.vx_mps)
+    robot, course = load_robot(spec.robot), load_course(spec.course)
     config = controller_config(case.controller, robot.spec.planar, overrides=list(case.overrides))
-    ctx = ControllerContext(robot, course, command, config=config)
+    ctx = ControllerContext(robot, course, Command(vx_mps=spec.vx_mps), config=config)
     return Simulator(robot, course), make_controller(case.controller, ctx)
 
 

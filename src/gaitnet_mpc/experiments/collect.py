@@ -31,7 +31,6 @@ from typing import Any
 from gaitnet_mpc.config import dumps
 from gaitnet_mpc.dataset.protocol import CollectProtocol, SetSpec
 from gaitnet_mpc.dataset.schema import FEATURE_NAMES, LABEL, SCHEMA_VERSION, describe
-from gaitnet_mpc.dataset.setrun import SetResult, run_set
 from gaitnet_mpc.dataset.store import (
     MANIFEST,
     DatasetError,
@@ -43,8 +42,9 @@ from gaitnet_mpc.dataset.store import (
     set_file,
     sha256_file,
 )
-from gaitnet_mpc.dataset.teachers import teacher_config
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.experiments.setrun import SetResult, run_set
+from gaitnet_mpc.experiments.teachers import teacher_config
 from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
 from gaitnet_mpc.results.io import write_bytes_atomic, write_json_atomic
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field, replace
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.dataset.protocol import SetSpec
-from gaitnet_mpc.dataset.sampler import StepSampler
-from gaitnet_mpc.dataset.teachers import make_teacher
+from gaitnet_mpc.experiments.sampler import StepSampler
+from gaitnet_mpc.experiments.teachers import make_teacher
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.disturbances import protocol_pushes
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator

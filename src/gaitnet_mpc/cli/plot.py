@@ -1,0 +1,26 @@
+"""``gaitnet-mpc plot RUN_DIR``: (re)make the PNGs of a run folder from its files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+SUMMARY = "(re)make the plots of a run folder"
+
+
+def add_parser(sub: Any) -> None:
+    plot = sub.add_parser("plot", help=SUMMARY)
+    plot.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="folder written by `run`")
+
+
+def main(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.results.plots import make_plots
+
+    written = make_plots(args.run_dir)
+    for path in written:
+        print(path)
+    if not written:
+        print(f"{args.run_dir}: empty log, no plots written", file=sys.stderr)
+    return 0

@@ -1,0 +1,70 @@
+"""Build the dt policy of a kino-dynamic controller from its settings
+(:class:`~gaitnet_mpc.dt_policy.DtPolicyConfig`): a fixed dt, Gait-Net, or the grid-search
+oracle, all behind :class:`~gaitnet_mpc.mpc.sequential.DtPolicy`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gaitnet_mpc.dt_policy import NOMINAL_DT_S, DtPolicyConfig, oracle_grid_s
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gaitnet import WEIGHTS_DIR, GaitNet, default_weights_path
+from gaitnet_mpc.gaitnet.policy import GaitNetDt
+from gaitnet_mpc.mpc.dt_oracle import OracleConfig, OracleDt
+from gaitnet_mpc.mpc.sequential import DtPolicy, FixedDt, SequentialConfig, SequentialKDMPC
+from gaitnet_mpc.robots import RobotModel
+
+
+def shipped_weights() -> list[str]:
+    """Names of the Gait-Net weights shipped with the package (``humanoid3d-wbmpc``, ...)."""
+    return sorted(p.stem for p in WEIGHTS_DIR.glob("*.npz"))
+
+
+def weights_path(robot: RobotModel, weights: str | Path | None) -> Path:
+    """The file of ``weights``: a shipped name, a path, or None for the robot's default."""
+    if weights is None:
+        return default_weights_path(robot.name)
+    if str(weights) in shipped_weights():
+        return WEIGHTS_DIR / f"{weights}.npz"
+    return Path(weights)
+
+
+def load_gaitnet(robot: RobotModel, weights: str | Path | None) -> GaitNet:
+    """The network of ``weights`` (see :func:`weights_path`), checked to be ``robot``'s."""
+    path = weights_path(robot, weights)
+    if not path.is_file():
+        raise ConfigError(
+            "--gaitnet-weights",
+            str(weights if weights is not None else path),
+            f"a shipped name ({', '.join(shipped_weights())}) or a weights file "
+            "(gaitnet-mpc train --out DIR)",
+        )
+    net = GaitNet.load(path)
+    if net.spec.robot and net.spec.robot != robot.name:
+        raise ConfigError("--gaitnet-weights", str(path), f"weights for {robot.name}")
+    return net
+
+
+def make_dt_policy(
+    config: DtPolicyConfig, robot: RobotModel, sequential: SequentialConfig
+) -> DtPolicy:
+    """The policy ``config`` names, for ``robot``; the oracle searches with its own
+    solver of the ``sequential`` settings (so its grid solves leave the controller's
+    workspaces alone)."""
+    planar = robot.spec.planar
+    if config.kind == "fixed":
+        return FixedDt(config.dt_s if config.dt_s is not None else NOMINAL_DT_S)
+    if config.kind == "gaitnet":
+        return GaitNetDt(
+            load_gaitnet(robot, config.gaitnet_weights),
+            planar,
+            config.gaitnet,
+            bounds_s=config.bounds_for(planar),
+            nominal_dt_s=config.dt_s if config.dt_s is not None else NOMINAL_DT_S,
+        )
+    grid = oracle_grid_s(config.bounds_for(planar), config.oracle_grid_step_s)
+    oracle = OracleDt(
+        OracleConfig(dts_s=grid, nominal_dt_s=grid[0] if config.dt_s is None else config.dt_s)
+    )
+    oracle.attach(SequentialKDMPC(robot, sequential))
+    return oracle

@@ -1,0 +1,146 @@
+"""The one owner of the MPC sampling time ``dt``: nominal value, per-robot bounds, the
+clip, the oracle grid, and the typed settings of every dt policy.
+
+A step of the gait lasts ``h' = 5`` MPC stages, so a step lasts ``5 dt`` (paper Sec.
+IV-B). A *dt policy* chooses each step's ``dt`` at the step start, inside the sequential
+iterations (Algorithm 1, line 8). The policies (built by
+:func:`gaitnet_mpc.control.dt_policies.make_dt_policy`, all behind the
+:class:`~gaitnet_mpc.mpc.sequential.DtPolicy` interface):
+
+* ``fixed``: the same dt for every step (the paper's baseline 1, Fig. 6a);
+* ``gaitnet``: Gait-Net's dt from the step-start state and the iterate's touchdown, with
+  the safeguards of :class:`GaitNetPolicyConfig`;
+* ``oracle``: a grid search that solves the step once per dt of :func:`oracle_grid_s` and
+  keeps the converged plan of lowest eq. 18 cost.
+
+:class:`DtPolicyConfig` is part of a kino-dynamic controller's settings
+(``KDWalkConfig.dt_policy``), so a run's ``config.toml`` and ``scenario.toml`` hold it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from gaitnet_mpc.errors import ConfigError
+
+#: The paper's nominal sampling time ``dt^0`` [s]: a 0.225 s step (Table VIII).
+NOMINAL_DT_S = 0.045
+
+#: The range of a dt any controller accepts [s]: the gait schedule's clip and the check
+#: of ``gaitnet-mpc run --dt``. 0.03 s is Table V's lower bound (the biped); 0.2 s (a 1 s
+#: step) is past any walking gait of these robots.
+ACCEPTED_DT_RANGE_S = (0.03, 0.2)
+
+#: The paper's bounds of a chosen dt [s], by robot kind (``RobotSpec.planar``): the
+#: humanoid's [0.045, 0.07] s (Sec. V-E1, Fig. 9) and the planar biped's [0.03, 0.06] s
+#: (Table V).
+PAPER_DT_BOUNDS_S: dict[bool, tuple[float, float]] = {False: (0.045, 0.07), True: (0.03, 0.06)}
+
+#: Spacing of the oracle's grid over the bounds [s].
+ORACLE_GRID_STEP_S = 0.005
+
+#: The dt policies, by the name :class:`DtPolicyConfig` ``kind`` takes.
+DT_POLICIES = ("fixed", "gaitnet", "oracle")
+
+
+def paper_dt_bounds_s(planar: bool) -> tuple[float, float]:
+    """The paper's (min, max) dt [s] of a planar (Table V) or 3-D (Sec. V-E1) robot."""
+    return PAPER_DT_BOUNDS_S[bool(planar)]
+
+
+def clip_dt(dt_s: float, bounds_s: tuple[float, float]) -> float:
+    """``dt_s`` clipped into ``bounds_s`` = (min, max) [s]."""
+    lo, hi = bounds_s
+    return min(max(dt_s, lo), hi)
+
+
+def oracle_grid_s(
+    bounds_s: tuple[float, float], step_s: float = ORACLE_GRID_STEP_S
+) -> tuple[float, ...]:
+    """The dts [s] the oracle tries: ``bounds_s`` in steps of ``step_s``, both ends in."""
+    lo, hi = bounds_s
+    n = round((hi - lo) / step_s) + 1
+    return tuple(float(round(lo + i * (hi - lo) / max(n - 1, 1), 6)) for i in range(n))
+
+
+def check_bounds(field_name: str, bounds_s: tuple[float, float]) -> None:
+    """:class:`ConfigError` unless ``bounds_s`` is (min, max) with 0 < min <= max < inf."""
+    lo, hi = bounds_s
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo <= hi):
+        raise ConfigError(field_name, bounds_s, "(min, max) with 0 < min <= max [s]")
+
+
+@dataclass(frozen=True)
+class GaitNetPolicyConfig:
+    """Safeguards of the Gait-Net dt policy (:class:`~gaitnet_mpc.gaitnet.policy.GaitNetDt`;
+    paper Sec. VI names the failure they guard against: dts that do not settle).
+
+    Attributes:
+        max_spread_s: ensemble spread [s] above which the input counts as unknown.
+        cycle_tolerance_s: dt changes smaller than this are not counted as a cycle [s].
+        max_damped: damped iterations before a cycling solve falls back.
+        safeguards: False: none of them (the network's clipped dt at every iteration,
+            Algorithm 1 as printed; the ``paper`` preset).
+        max_retimes: dt changes per step start before the dt is frozen; None: no limit
+            (Algorithm 1 as printed). 2 on tuning gaps: 10/10 without a fall, against
+            6/10 without a limit and 9/10 with 1 (gaitnet_runs_tuning.md).
+    """
+
+    max_spread_s: float = 0.006
+    cycle_tolerance_s: float = 5e-4
+    max_damped: int = 3
+    safeguards: bool = True
+    max_retimes: int | None = 2
+
+    def __post_init__(self) -> None:
+        for name in ("max_spread_s", "cycle_tolerance_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ConfigError(name, value, "a value > 0")
+        if self.max_damped < 0:
+            raise ConfigError("max_damped", self.max_damped, "an integer >= 0")
+        if self.max_retimes is not None and self.max_retimes < 1:
+            raise ConfigError("max_retimes", self.max_retimes, "None or an integer >= 1")
+
+
+@dataclass(frozen=True)
+class DtPolicyConfig:
+    """Which policy chooses each step's dt, and its settings.
+
+    Attributes:
+        kind: one of :data:`DT_POLICIES`; set by the controller's name (``kd``: fixed,
+            ``gaitnet``, ``oracle``).
+        dt_s: fixed: every step's dt [s]; gaitnet and oracle: ``dt^0``, the dt of the
+            first step before any decision and their fallback. None: :data:`NOMINAL_DT_S`,
+            for the oracle the lower end of its grid.
+        bounds_s: gaitnet and oracle: (min, max) of a chosen dt [s]; None: the paper's
+            bounds of the robot (:data:`PAPER_DT_BOUNDS_S`).
+        gaitnet_weights: gaitnet: the network, a shipped name (``humanoid3d-wbmpc``) or a
+            path to a ``.npz`` of ``gaitnet-mpc train``; None: the default for the robot.
+        gaitnet: gaitnet: the safeguards.
+        oracle_grid_step_s: oracle: spacing of the grid over the bounds [s].
+    """
+
+    kind: str = "fixed"
+    dt_s: float | None = None
+    bounds_s: tuple[float, float] | None = None
+    gaitnet_weights: str | None = None
+    gaitnet: GaitNetPolicyConfig = field(default_factory=GaitNetPolicyConfig)
+    oracle_grid_step_s: float = ORACLE_GRID_STEP_S
+
+    def __post_init__(self) -> None:
+        if self.kind not in DT_POLICIES:
+            raise ConfigError("kind", self.kind, f"one of {', '.join(DT_POLICIES)}")
+        lo, hi = ACCEPTED_DT_RANGE_S
+        if self.dt_s is not None and not (math.isfinite(self.dt_s) and lo <= self.dt_s <= hi):
+            raise ConfigError("dt_s", self.dt_s, f"None or a sampling time in [{lo:g}, {hi:g}] s")
+        if self.bounds_s is not None:
+            check_bounds("bounds_s", self.bounds_s)
+        step = self.oracle_grid_step_s
+        if not (math.isfinite(step) and step > 0.0):
+            raise ConfigError("oracle_grid_step_s", step, "a time step > 0 s")
+
+    def bounds_for(self, planar: bool) -> tuple[float, float]:
+        """The (min, max) dt [s] of a chosen dt on a planar or 3-D robot."""
+        return self.bounds_s if self.bounds_s is not None else paper_dt_bounds_s(planar)
