@@ -6,6 +6,7 @@ Plots and ``compare`` are tested in ``test_results.py``.
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -27,8 +28,6 @@ SUMMARY_KEYS = {
     "foothold_violations",
     "step_durations_s",
     "mpc",
-    "wall_time_s",
-    "realtime_factor",
     "diverged",
     "self_collisions",
     "self_collision_first_t_s",
@@ -65,6 +64,10 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
     assert (out / "course.json").is_file()
     summary = json.loads((out / "summary.json").read_text())
     assert SUMMARY_KEYS <= summary.keys()
+    timing = json.loads((out / "timing.json").read_text())  # the wall-clock figures
+    assert {"wall_time_s", "render_time_s", "realtime_factor"} <= timing.keys()
+    assert not timing.keys() & summary.keys()
+    assert tomllib.loads((out / "scenario.toml").read_text())["controller"] == "stand"
     assert summary["fell"] is False and summary["diverged"] is False
     assert summary["self_collisions"] == 0 and summary["self_collision_pairs"] == []
     assert summary["duration_s"] == pytest.approx(1.2)
@@ -259,7 +262,14 @@ def test_a_folder_with_a_run_is_refused_unless_overwrite(tmp_path: Path, capsys)
     assert _stand_run(out, "--overwrite") == 0
     assert not (out / "video.mp4").exists()  # only the new run's files remain
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["course.json", "events.csv", "log.csv", "summary.json"]
+    assert names == [
+        "course.json",
+        "events.csv",
+        "log.csv",
+        "scenario.toml",
+        "summary.json",
+        "timing.json",
+    ]
     (out / "notes.txt").write_text("mine")
     assert _stand_run(out, "--overwrite") == 2  # never deletes what a run did not write
     assert "notes.txt" in capsys.readouterr().err

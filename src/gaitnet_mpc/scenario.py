@@ -43,6 +43,7 @@ from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.control.registry import (
     CONTROLLERS,
+    KD_FAMILY,
     ControllerContext,
     config_type,
     controller_config,
@@ -261,8 +262,8 @@ def make_scenario(
     before anything is simulated (:class:`ConfigError` names the field)."""
     if robot not in ROBOTS:
         raise ConfigError("--robot", robot, f"one of {sorted(ROBOTS)}")
-    if preview and controller not in ("kd", "gaitnet", "oracle"):
-        raise ConfigError("--preview", controller, "one of gaitnet, kd, oracle")
+    if preview and controller not in KD_FAMILY:
+        raise ConfigError("--preview", controller, f"one of {', '.join(KD_FAMILY)}")
     config = controller_config(
         controller,
         ROBOTS[robot].planar,
