@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gaitnet_mpc.bench import profile_parts
+from gaitnet_mpc.experiments.bench import profile_parts
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController
 from gaitnet_mpc.control.terrain_view import TerrainView

@@ -27,7 +27,7 @@ import shlex
 import sys
 import time
 
-from gaitnet_mpc.bench import parse_case
+from gaitnet_mpc.experiments.bench import parse_case
 from machine import clean_run, machine_info, run_pool, write_report
 
 SEEDED_S = 8.0

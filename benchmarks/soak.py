@@ -479,7 +479,7 @@ def make_report(
     interrupted: bool,
 ) -> str:
     """The Markdown report of the finished episodes."""
-    from gaitnet_mpc.dataset.collect import provenance
+    from gaitnet_mpc.experiments.collect import provenance
 
     prov = provenance()
     rows = [records[i] for i in sorted(records) if i < n_episodes]
@@ -586,7 +586,7 @@ class SoakOptions:
     address: str | None = None
 
     def __post_init__(self) -> None:
-        from gaitnet_mpc.dataset.collect import CollectOptions
+        from gaitnet_mpc.experiments.collect import CollectOptions
         from gaitnet_mpc.errors import ConfigError
 
         if not (isinstance(self.episodes, int) and self.episodes >= 1):

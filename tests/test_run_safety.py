@@ -55,7 +55,7 @@ def test_run_help_lists_every_option_default_range_controller_and_course(capsys)
         "default: flat",
         "[-1.5, 1.5]",
         "[-0.5, 0.5]",
-        "in [0.01, 3600] s (default: 10.0)",
+        "in [0.01, 3600] (default: 10.0)",
         "[0.03, 0.2]",
         "0.045 s",
         "fz",
