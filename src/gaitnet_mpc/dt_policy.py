@@ -11,7 +11,9 @@ iterations (Algorithm 1, line 8). The policies (built by
 * ``gaitnet``: Gait-Net's dt from the step-start state and the iterate's touchdown, with
   the safeguards of :class:`GaitNetPolicyConfig`;
 * ``oracle``: a grid search that solves the step once per dt of :func:`oracle_grid_s` and
-  keeps the converged plan of lowest eq. 18 cost.
+  keeps the converged plan of lowest eq. 18 cost;
+* ``drawn``: each step's duration drawn at random, blind to the state: the ``kd`` teacher
+  of data collection (Sec. IV-A-1).
 
 :class:`DtPolicyConfig` is part of a kino-dynamic controller's settings
 (``KDWalkConfig.dt_policy``), so a run's ``config.toml`` and ``scenario.toml`` hold it.
@@ -41,7 +43,7 @@ PAPER_DT_BOUNDS_S: dict[bool, tuple[float, float]] = {False: (0.045, 0.07), True
 ORACLE_GRID_STEP_S = 0.005
 
 #: The dt policies, by the name :class:`DtPolicyConfig` ``kind`` takes.
-DT_POLICIES = ("fixed", "gaitnet", "oracle")
+DT_POLICIES = ("fixed", "gaitnet", "oracle", "drawn")
 
 
 def paper_dt_bounds_s(planar: bool) -> tuple[float, float]:
@@ -110,7 +112,7 @@ class DtPolicyConfig:
 
     Attributes:
         kind: one of :data:`DT_POLICIES`; set by the controller's name (``kd``: fixed,
-            ``gaitnet``, ``oracle``).
+            or drawn for data collection; ``gaitnet``; ``oracle``).
         dt_s: fixed: every step's dt [s]; gaitnet and oracle: ``dt^0``, the dt of the
             first step before any decision and their fallback. None: :data:`NOMINAL_DT_S`,
             for the oracle the lower end of its grid.
@@ -120,6 +122,8 @@ class DtPolicyConfig:
             path to a ``.npz`` of ``gaitnet-mpc train``; None: the default for the robot.
         gaitnet: gaitnet: the safeguards.
         oracle_grid_step_s: oracle: spacing of the grid over the bounds [s].
+        drawn_step_range_s: drawn: (min, max) of a step's duration [s] (5 stages).
+        drawn_seed: drawn: seed of the draws (one draw per step index).
     """
 
     kind: str = "fixed"
@@ -128,6 +132,8 @@ class DtPolicyConfig:
     gaitnet_weights: str | None = None
     gaitnet: GaitNetPolicyConfig = field(default_factory=GaitNetPolicyConfig)
     oracle_grid_step_s: float = ORACLE_GRID_STEP_S
+    drawn_step_range_s: tuple[float, float] = (0.15, 0.40)
+    drawn_seed: int = 0
 
     def __post_init__(self) -> None:
         if self.kind not in DT_POLICIES:
@@ -140,6 +146,7 @@ class DtPolicyConfig:
         step = self.oracle_grid_step_s
         if not (math.isfinite(step) and step > 0.0):
             raise ConfigError("oracle_grid_step_s", step, "a time step > 0 s")
+        check_bounds("drawn_step_range_s", self.drawn_step_range_s)
 
     def bounds_for(self, planar: bool) -> tuple[float, float]:
         """The (min, max) dt [s] of a chosen dt on a planar or 3-D robot."""

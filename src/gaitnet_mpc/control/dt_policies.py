@@ -6,12 +6,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP
 from gaitnet_mpc.dt_policy import NOMINAL_DT_S, DtPolicyConfig, oracle_grid_s
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.gait.step_durations import StepDurations
 from gaitnet_mpc.gaitnet import WEIGHTS_DIR, GaitNet, default_weights_path
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.mpc.dt_oracle import OracleConfig, OracleDt
-from gaitnet_mpc.mpc.sequential import DtPolicy, FixedDt, SequentialConfig, SequentialKDMPC
+from gaitnet_mpc.mpc.sequential import (
+    DtPolicy,
+    FixedDt,
+    ScheduledDt,
+    SequentialConfig,
+    SequentialKDMPC,
+)
 from gaitnet_mpc.robots import RobotModel
 
 
@@ -54,6 +62,13 @@ def make_dt_policy(
     planar = robot.spec.planar
     if config.kind == "fixed":
         return FixedDt(config.dt_s if config.dt_s is not None else NOMINAL_DT_S)
+    if config.kind == "drawn":
+        durations = StepDurations(
+            duration_range_s=config.drawn_step_range_s,
+            stages_per_step=STAGES_PER_STEP,
+            seed=config.drawn_seed,
+        )
+        return ScheduledDt(durations)
     if config.kind == "gaitnet":
         return GaitNetDt(
             load_gaitnet(robot, config.gaitnet_weights),

@@ -66,7 +66,7 @@ def _kd_raibert(planar: bool) -> RaibertHeuristic:
 
 
 #: The controller name of each dt policy kind.
-CONTROLLER_OF_POLICY = {"fixed": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
+CONTROLLER_OF_POLICY = {"fixed": "kd", "drawn": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
 
 
 class KDWalkController(WalkingBase):
@@ -250,7 +250,7 @@ class KDWalkController(WalkingBase):
         kk = np.minimum(np.arange(h + 1), h - 1)
         tau = times - start[kk]
         T = length[kk]
-        z = max(float(self.mpc.ref_workspace.com_height_m), 0.2)
+        z = max(float(self.mpc.ref_workspace.com_height_m), self.config.lip_min_com_height_m)
         w = lip_frequency(z)
         y_off, v_off = lip_sway_orbit(side[kk], self.config.lip_half_width_m, w, tau, T)
         # centre line: commanded path, lateral offset from the measured CoM
@@ -408,7 +408,7 @@ class KDWalkController(WalkingBase):
         if td is not None and self.swing is not None:
             td = td.copy()
             td[2] -= self.config.touchdown_depth_m
-            if sched.phase_in_step < 0.85:
+            if sched.phase_in_step < self.config.retarget_until_phase:
                 self.swing.retarget(td, sched.time_in_step_s)
 
     def _swing_trajectory(self, target: np.ndarray) -> SwingTrajectory:
@@ -416,7 +416,8 @@ class KDWalkController(WalkingBase):
         sched = self.schedule
         start = self.liftoff[sched.swing_foot]
         x0, x1 = sorted((start[0], target[0]))
-        obstacles = self.terrain.swing_obstacles(x0 - 0.1, x1 + 0.2)
+        behind_m, ahead_m = self.config.swing_obstacle_window_m
+        obstacles = self.terrain.swing_obstacles(x0 - behind_m, x1 + ahead_m)
         return self.config.swing.trajectory(
             start,
             target,

@@ -100,6 +100,13 @@ class KDWalkConfig:
     # 4/10 with 0.3 m alone; with a 0.04 m lateral margin 0.25 / 0.3 / 0.35 m gave 3 / 6 / 6.
     foothold_reach_m: float = 0.3
     touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
+    # The swing foot follows each replan's touchdown until this fraction of the step; later
+    # it keeps its aim, so that a last-moment change does not jerk the foot just before it
+    # lands. Set when the retargeting was written, not tuned.
+    retarget_until_phase: float = 0.85
+    # Obstacles the swing trajectory clears: those from this far behind the lift-off to
+    # this far beyond the target, along x [m] (behind, ahead); the foot is 0.15 m long.
+    swing_obstacle_window_m: tuple[float, float] = (0.1, 0.2)
     # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
     # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
     # with feet at +-lip_half_width_m beside a centre line (see _lip_reference). "line"
@@ -107,6 +114,10 @@ class KDWalkConfig:
     # feet at patch edges fail more often (docs/design/lateral_reference.md).
     lateral_reference: str = "line"
     lip_half_width_m: float = 0.07
+    # Lowest CoM height [m] the LIP sway orbit's frequency sqrt(g / z) is computed with, a
+    # guard against a reference height near 0 (the humanoid stands at 0.55 m; never active
+    # in a walk measured here).
+    lip_min_com_height_m: float = 0.2
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
     # None: the centre is the commanded path itself.
     lip_anchor_max_m: float | None = None
@@ -151,6 +162,16 @@ class KDWalkConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0):
                 raise ConfigError(name, value, "a finite distance >= 0 m")
+        if not 0.0 < self.retarget_until_phase <= 1.0:
+            raise ConfigError(
+                "retarget_until_phase", self.retarget_until_phase, "a phase in (0, 1]"
+            )
+        if not (np.isfinite(self.lip_min_com_height_m) and self.lip_min_com_height_m > 0.0):
+            raise ConfigError("lip_min_com_height_m", self.lip_min_com_height_m, "a height > 0 m")
+        if not all(np.isfinite(d) and d >= 0.0 for d in self.swing_obstacle_window_m):
+            raise ConfigError(
+                "swing_obstacle_window_m", self.swing_obstacle_window_m, "two distances >= 0 m"
+            )
         tau = self.lateral_return_time_s
         if tau is not None and not (np.isfinite(tau) and tau > 0.0):
             raise ConfigError("lateral_return_time_s", tau, "None or a finite time > 0 s")

@@ -33,6 +33,8 @@ class ControllerContext:
 #: and the ``KDWalkConfig.dt_policy.kind`` each name sets.
 KD_FAMILY = ("kd", "gaitnet", "oracle")
 POLICY_OF_CONTROLLER = {"kd": "fixed", "gaitnet": "gaitnet", "oracle": "oracle"}
+#: The dt policies each of them may run (``drawn``: the data-collection teacher).
+POLICIES_OF_CONTROLLER = {"kd": ("fixed", "drawn"), "gaitnet": ("gaitnet",), "oracle": ("oracle",)}
 
 
 def config_type(name: str) -> type | None:
@@ -111,12 +113,12 @@ def controller_config(
         )
     if overrides:
         config = configio.apply(config, configio.parse_overrides(overrides), "--set ")
-    if name in KD_FAMILY and config.dt_policy.kind != POLICY_OF_CONTROLLER[name]:
+    if name in KD_FAMILY and config.dt_policy.kind not in POLICIES_OF_CONTROLLER[name]:
         raise ConfigError(
             "dt_policy.kind",
             config.dt_policy.kind,
-            f"{POLICY_OF_CONTROLLER[name]!r} for --controller {name} (the controller's name "
-            "chooses the dt policy)",
+            f"one of {POLICIES_OF_CONTROLLER[name]} for --controller {name} (the "
+            "controller's name chooses the dt policy)",
         )
     return config
 

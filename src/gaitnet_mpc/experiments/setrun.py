@@ -16,11 +16,11 @@ from dataclasses import dataclass, field, replace
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.dataset.protocol import SetSpec
 from gaitnet_mpc.experiments.sampler import StepSampler
-from gaitnet_mpc.experiments.teachers import make_teacher
-from gaitnet_mpc.robots import load_robot
+from gaitnet_mpc.experiments.teachers import teacher_scenario
+from gaitnet_mpc.robots import ROBOTS
+from gaitnet_mpc.scenario import MAX_DURATION_S, MIN_DURATION_S, build_episode
 from gaitnet_mpc.sim.disturbances import protocol_pushes
-from gaitnet_mpc.sim.simulator import SimConfig, Simulator
-from gaitnet_mpc.terrain import SEEDED_COURSES, Course, load_course
+from gaitnet_mpc.terrain import SEEDED_COURSES
 
 #: Simulated seconds between two progress reports of a set.
 PROGRESS_PERIOD_S = 0.5
@@ -66,14 +66,6 @@ class SetResult:
         }
 
 
-def set_course(spec: SetSpec) -> Course:
-    """The set's course; a seeded course gets the set's course seed."""
-    name = spec.protocol.course
-    if name in SEEDED_COURSES:
-        return load_course(name, seed=spec.course_seed)
-    return load_course(name)
-
-
 def run_set(spec: SetSpec, progress: Callable[[float], None] | None = None) -> SetResult:
     """Walk set ``spec``; ``progress(simulated_seconds)`` is called every
     :data:`PROGRESS_PERIOD_S` of simulated time (and with the rest at the end)."""
@@ -83,7 +75,6 @@ def run_set(spec: SetSpec, progress: Callable[[float], None] | None = None) -> S
     set_pushes = protocol_pushes(
         spec.pushes_seed, spec.push_start_s, spec.seconds, p.period_s, p.force_range_n, p.duration_s
     )
-    course = set_course(spec)
     command = Command(spec.vx_mps)
     sampler = StepSampler(spec.index, spec.vx_mps)
     result = SetResult(spec)
@@ -92,12 +83,19 @@ def run_set(spec: SetSpec, progress: Callable[[float], None] | None = None) -> S
         if result.segments > protocol.max_restarts:
             result.ended_short = True
             break
-        robot = load_robot(protocol.robot)
         pushes = tuple(replace(q, t_s=q.t_s - t_set) for q in set_pushes if q.t_s >= t_set)
-        sim = Simulator(robot, course, SimConfig(pushes=pushes))
-        controller = make_teacher(
-            protocol, robot, course, command, spec.durations_seed + result.segments
+        scenario = teacher_scenario(
+            protocol,
+            spec.course_seed if protocol.course in SEEDED_COURSES else None,
+            command,
+            spec.durations_seed + result.segments,
+            # the loop below keeps the set's clock; the scenario only records the time left
+            min(max(spec.seconds - t_set, MIN_DURATION_S), MAX_DURATION_S),
+            pushes,
+            ROBOTS[protocol.robot].planar,
         )
+        episode = build_episode(scenario)
+        sim, controller = episode.sim, episode.controller
         state = sim.state()
         controller.reset(state)
         sampler.start_segment(result.segments)

@@ -12,11 +12,9 @@ from dataclasses import replace
 from typing import Any
 
 from gaitnet_mpc.command import Command
-from gaitnet_mpc.control.base import Controller
-from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP, CollectProtocol
-from gaitnet_mpc.gait.step_durations import StepDurations
-from gaitnet_mpc.robots import RobotModel
-from gaitnet_mpc.terrain import Course
+from gaitnet_mpc.dataset.protocol import CollectProtocol
+from gaitnet_mpc.scenario import Scenario
+from gaitnet_mpc.sim.disturbances import Push
 
 
 def teacher_config(protocol: CollectProtocol, planar: bool) -> Any:
@@ -31,40 +29,40 @@ def teacher_config(protocol: CollectProtocol, planar: bool) -> Any:
     )
 
 
-def make_teacher(
+def teacher_scenario(
     protocol: CollectProtocol,
-    robot: RobotModel,
-    course: Course,
+    course_seed: int | None,
     command: Command,
     durations_seed: int,
-) -> Controller:
-    """The teacher controller of one episode, its step durations drawn from
+    duration_s: float,
+    pushes: tuple[Push, ...],
+    planar: bool,
+) -> Scenario:
+    """One episode of the teacher, its step durations drawn from
     ``protocol.duration_range_s`` with ``durations_seed``."""
-    config = teacher_config(protocol, robot.spec.planar)
+    config = teacher_config(protocol, planar)
     if protocol.teacher == "wbmpc":
-        from gaitnet_mpc.control.terrain_view import TerrainView
-        from gaitnet_mpc.control.wbmpc_walk import WBWalkController
-
         durations = replace(
             config.step_durations,
             duration_range_s=protocol.duration_range_s,
             seed=durations_seed,
         )
         config = replace(config, step_durations=durations)
-        return WBWalkController(robot, TerrainView(course), command, config)
-    from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import walk_terrain
-    from gaitnet_mpc.mpc.sequential import ScheduledDt
-
-    durations = StepDurations(
-        duration_range_s=protocol.duration_range_s,
-        stages_per_step=STAGES_PER_STEP,
-        seed=durations_seed,
-    )
-    return KDWalkController(
-        robot,
-        walk_terrain(course, config),
-        command,
-        dt_policy=ScheduledDt(durations),
+    else:
+        drawn = replace(
+            config.dt_policy,
+            kind="drawn",
+            drawn_step_range_s=protocol.duration_range_s,
+            drawn_seed=durations_seed,
+        )
+        config = replace(config, dt_policy=drawn)
+    return Scenario(
+        robot=protocol.robot,
+        controller=protocol.teacher,
+        course=protocol.course,
+        course_seed=course_seed,
+        command=command,
+        duration_s=duration_s,
+        pushes=pushes,
         config=config,
     )

@@ -159,30 +159,29 @@ def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording
     """Walk ``spec.course`` with the ``kd`` controller, its solver replaced by a
     :class:`RecordingKDMPC` (stops early at a fall)."""
     from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import (
-        KDWalkConfig,
-        preview_walk_config,
-        walk_terrain,
-    )
-    from gaitnet_mpc.mpc.sequential import FixedDt
-    from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.sim.simulator import Simulator
-    from gaitnet_mpc.terrain import load_course
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
+    from gaitnet_mpc.dt_policy import DtPolicyConfig
+    from gaitnet_mpc.scenario import Scenario, build_episode
 
-    robot = load_robot(robot_name)
-    course = load_course(spec.course, **({} if spec.seed is None else {"seed": spec.seed}))
+    config = KDWalkConfig(cop_fraction=spec.cop_fraction, dt_policy=DtPolicyConfig(dt_s=spec.dt_s))
+    config = preview_walk_config(config) if spec.preview else config
+    scenario = Scenario(
+        robot=robot_name,
+        controller="kd",
+        course=spec.course,
+        course_seed=spec.seed,
+        command=Command(vx_mps=spec.vx_mps),
+        duration_s=spec.duration_s,
+        config=config,
+    )
+    episode = build_episode(scenario)
+    course, sim, ctrl = episode.course, episode.sim, episode.controller
+    assert isinstance(ctrl, KDWalkController)
     if spec.stones_only and len(course.patches) < 3:
         raise ConfigError("stones_only", spec.course, "a course with stones between platforms")
     x_window_m = (course.patches[1].x_min, course.patches[-1].x_min) if spec.stones_only else (0, 0)
-    config = KDWalkConfig(cop_fraction=spec.cop_fraction)
-    config = preview_walk_config(config) if spec.preview else config
-    command = Command(vx_mps=spec.vx_mps)
-    ctrl = KDWalkController(
-        robot, walk_terrain(course, config), command, FixedDt(spec.dt_s), config
-    )
     recorder = RecordingKDMPC(ctrl.mpc)
     ctrl.mpc = recorder
-    sim = Simulator(robot, course)
     ctrl.reset(sim.state())
     times: list[float] = []
     x_base_m: list[float] = []
