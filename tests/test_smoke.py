@@ -1,6 +1,6 @@
 """Smoke test: every registered controller on every robot and built-in course, one second of
-simulated time through the path of ``gaitnet-mpc run`` (settings from the default preset,
-:func:`make_controller`, :func:`run_episode` without an output folder).
+simulated time through the path of ``gaitnet-mpc run`` (:func:`make_scenario` with the
+default preset, :func:`run_scenario` without an output folder).
 
 Measured (this test's setup, 1 s, forward command 0.5 m/s for the walkers): no combination
 falls or diverges; kd covers 0.23 m (biped2d) / 0.34 m (humanoid3d), srbm 0.13 m / 0.34 m,
@@ -17,17 +17,10 @@ from collections.abc import Callable
 
 import pytest
 
-from gaitnet_mpc.command import Command
-from gaitnet_mpc.control.registry import (
-    CONTROLLERS,
-    ControllerContext,
-    controller_config,
-    make_controller,
-)
+from gaitnet_mpc.control.registry import CONTROLLERS
 from gaitnet_mpc.robots import ROBOTS, RobotModel
-from gaitnet_mpc.runner.episode import run_episode
-from gaitnet_mpc.sim.simulator import Simulator
-from gaitnet_mpc.terrain import BUILTIN_COURSES, load_course
+from gaitnet_mpc.scenario import make_scenario, run_scenario
+from gaitnet_mpc.terrain import BUILTIN_COURSES
 
 DURATION_S = 1.0
 WALK_VX_MPS = 0.5
@@ -45,14 +38,14 @@ def test_one_second_without_fall_or_divergence(
 ) -> None:
     if controller == "wbmpc" and course_name != "flat":
         pytest.skip("wbmpc is made for flat ground; its NLP build costs ~40 s per humanoid")
-    robot = robots(robot_name)
-    course = load_course(course_name)
-    command = Command() if controller == "stand" else Command(WALK_VX_MPS)
-    config = controller_config(controller, robot.spec.planar)
-    ctrl = make_controller(controller, ControllerContext(robot, course, command, config))
-    sim = Simulator(robot, course)
-
-    summary = run_episode(sim, ctrl, command, DURATION_S, progress=False)
+    scenario = make_scenario(
+        robot=robot_name,
+        controller=controller,
+        course=course_name,
+        vx_mps=0.0 if controller == "stand" else WALK_VX_MPS,
+        duration_s=DURATION_S,
+    )
+    summary = run_scenario(scenario, robot=robots(robot_name))
 
     assert not summary["diverged"], summary["fall_reason"]
     assert not summary["fell"], summary["fall_reason"]
