@@ -1,6 +1,6 @@
 """Foothold boxes: the eq. (24) bounds ``p_min <= p_foot <= p_max`` a patch puts on a foot.
 
-:func:`foothold_box` is the box of one patch (:meth:`Patch.foothold_box`);
+The box of one patch is :meth:`Patch.foothold_box`;
 :func:`reachable_foothold_bounds` chooses the patch of the next touchdown by kinematic reach
 (:meth:`Course.reachable_foothold_bounds`, one-step preview).
 """
@@ -9,23 +9,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitnet_mpc.terrain.fields import check_foot, point_xy
-
-if TYPE_CHECKING:
-    from gaitnet_mpc.terrain.patch import Patch
-
-
-def _shrink(lo: float, hi: float, margin_m: float) -> tuple[float, float]:
-    """``[lo + margin, hi - margin]``, or the centre twice if that is empty."""
-    if hi - lo >= 2.0 * margin_m:
-        return lo + margin_m, hi - margin_m
-    mid = 0.5 * (lo + hi)
-    return mid, mid
+from gaitnet_mpc.terrain.patch import Patch
 
 
 def _rect_distance(
@@ -35,18 +24,6 @@ def _rect_distance(
     dx = max(x_min - x, 0.0, x - x_max)
     dy = max(y_min - y, 0.0, y - y_max)
     return math.hypot(dx, dy)
-
-
-def foothold_box(
-    patch: Patch, margin_x_m: float, margin_y_m: float | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. (24) box ``(p_min (3,), p_max (3,))`` of a foot centre kept ``margin_x_m``
-    (``margin_y_m``, default the same) inside ``patch`` (its centre line where the
-    patch is narrower than twice that); z is the patch top."""
-    margin_y_m = margin_x_m if margin_y_m is None else margin_y_m
-    x_lo, x_hi = _shrink(patch.x_min, patch.x_max, margin_x_m)
-    y_lo, y_hi = _shrink(patch.y_min, patch.y_max, margin_y_m)
-    return np.array([x_lo, y_lo, patch.z_top_m]), np.array([x_hi, y_hi, patch.z_top_m])
 
 
 def reachable_foothold_bounds(
@@ -82,7 +59,7 @@ def reachable_foothold_bounds(
     for i, patch in enumerate(patches):
         if not patch.allows(foot):
             continue
-        lo, hi = foothold_box(patch, margin_m, margin_y_m)
+        lo, hi = patch.foothold_box(margin_m, margin_y_m)
         box = (max(lo[0], win[0]), min(hi[0], win[1]), max(lo[1], win[2]), min(hi[1], win[3]))
         if box[0] <= box[1] and box[2] <= box[3]:
             dx = max(box[0] - xn, 0.0, xn - box[1])
@@ -98,5 +75,5 @@ def reachable_foothold_bounds(
     if chosen is None:
         return np.array([win[0], win[2], 0.0]), np.array([win[1], win[3], 0.0]), None
     i = chosen[1]
-    lo, hi = foothold_box(patches[i], margin_m, margin_y_m)
+    lo, hi = patches[i].foothold_box(margin_m, margin_y_m)
     return lo, hi, i

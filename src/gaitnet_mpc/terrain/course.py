@@ -110,7 +110,9 @@ class Course:
         ``start_xy`` is written only when it is not the default (0, 0), ``seed`` only when
         it is not None.
         """
-        return json_format.course_to_dict(self)
+        return json_format.course_to_dict(
+            self.name, self.patches, self.obstacles, self.start_xy, self.seed
+        )
 
     @classmethod
     def from_json(cls, path: str | Path) -> Course:

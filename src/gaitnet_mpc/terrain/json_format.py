@@ -29,9 +29,9 @@ entry points; they delegate to the functions here.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from gaitnet_mpc.errors import CourseFormatError
 from gaitnet_mpc.terrain.fields import (
@@ -43,9 +43,6 @@ from gaitnet_mpc.terrain.fields import (
     layout_seed,
 )
 from gaitnet_mpc.terrain.patch import Obstacle, Patch, top_patch_index
-
-if TYPE_CHECKING:
-    from gaitnet_mpc.terrain.course import Course
 
 _TOP_KEYS: tuple[str, ...] = ("name", "patches", "obstacles", "start_xy", "seed")
 _PATCH_KEYS: tuple[str, ...] = ("x", "y", "z", "feet")
@@ -121,21 +118,27 @@ def _patch_from_dict(d: object, path: str) -> Patch:
     return Patch(x_min, x_max, y_min, y_max, z_top_m, feet)
 
 
-def course_to_dict(course: Course) -> dict[str, Any]:
-    """The JSON-ready dict of ``course``; ``Course.from_dict(course_to_dict(c)) == c``.
+def course_to_dict(
+    name: str,
+    patches: Sequence[Patch],
+    obstacles: Sequence[Obstacle],
+    start_xy: tuple[float, float],
+    seed: int | None,
+) -> dict[str, Any]:
+    """The JSON-ready dict of a course's fields (:meth:`Course.to_dict`).
 
     ``start_xy`` is written only when it is not the default (0, 0), ``seed`` only when
     it is not None.
     """
     out: dict[str, Any] = {
-        "name": course.name,
-        "patches": [p.to_dict() for p in course.patches],
-        "obstacles": [ob.to_dict() for ob in course.obstacles],
+        "name": name,
+        "patches": [p.to_dict() for p in patches],
+        "obstacles": [ob.to_dict() for ob in obstacles],
     }
-    if course.start_xy != (0.0, 0.0):
-        out["start_xy"] = list(course.start_xy)
-    if course.seed is not None:
-        out["seed"] = course.seed
+    if start_xy != (0.0, 0.0):
+        out["start_xy"] = list(start_xy)
+    if seed is not None:
+        out["seed"] = seed
     return out
 
 

@@ -14,8 +14,15 @@ from typing import Any
 import numpy as np
 
 from gaitnet_mpc.errors import CourseFormatError
-from gaitnet_mpc.terrain.bounds import foothold_box
 from gaitnet_mpc.terrain.fields import EPS_M, feet_field, finite_number
+
+
+def _shrink(lo: float, hi: float, margin_m: float) -> tuple[float, float]:
+    """``[lo + margin, hi - margin]``, or the centre twice if that is empty."""
+    if hi - lo >= 2.0 * margin_m:
+        return lo + margin_m, hi - margin_m
+    mid = 0.5 * (lo + hi)
+    return mid, mid
 
 
 @dataclass(frozen=True)
@@ -56,7 +63,10 @@ class Patch:
         """Eq. (24) box ``(p_min (3,), p_max (3,))`` of a foot centre kept ``margin_x_m``
         (``margin_y_m``, default the same) inside the patch (its centre line where the
         patch is narrower than twice that); z is the patch top."""
-        return foothold_box(self, margin_x_m, margin_y_m)
+        margin_y_m = margin_x_m if margin_y_m is None else margin_y_m
+        x_lo, x_hi = _shrink(self.x_min, self.x_max, margin_x_m)
+        y_lo, y_hi = _shrink(self.y_min, self.y_max, margin_y_m)
+        return np.array([x_lo, y_lo, self.z_top_m]), np.array([x_hi, y_hi, self.z_top_m])
 
     def contains(self, x: float, y: float) -> bool:
         """True iff (x, y) lies in the closed rectangle (tolerance 1 nm)."""
