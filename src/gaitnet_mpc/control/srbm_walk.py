@@ -144,14 +144,9 @@ class SRBMWalkController(WalkingController):
         next_dt = sched.next_step_dt_s or sched.current_step_dt_s
         t_next = sched.config.stages_per_step * next_dt
         p_st = self._stance_pos(state, stance_now)
-        now = np.arange(h) == 0  # the rest of the current stage
         if self.landed:  # the swing foot stands where it touched down
             p_sw = self._stance_pos(state, swing_now)
             contact[steps == 0, i_sw] = True
-        elif self.late:  # the stance foot is still in the air, the other one stands
-            p_sw = self._stance_pos(state, swing_now)
-            contact[now, i_sw] = True
-            contact[now, i_st] = False
         else:
             p_sw = self.foothold[swing_now]
         # The stance foot lands again (step 2) where the heuristic puts it for the CoM
@@ -173,13 +168,10 @@ class SRBMWalkController(WalkingController):
         # commanded heading its swing is steered to.
         yaw = np.full((h, 2), self.profile.heading_rad(state.t_s))
         yaw[steps == 0, i_st] = state.foot_yaw_rad[stance_now]
-        if self.landed or self.late:
+        if self.landed:
             yaw[steps <= 1, i_sw] = state.foot_yaw_rad[swing_now]
         t0 = time.perf_counter()
-        if self.late:
-            feet = [(i_sw, now)]
-        else:
-            feet = [(i_st, steps == 0)] + ([(i_sw, steps == 0)] if self.landed else [])
+        feet = [(i_st, steps == 0)] + ([(i_sw, steps == 0)] if self.landed else [])
         limits = self._torque_limits(state, feet)
         try:
             plan = self.mpc.solve(self._x0(state), x_ref, dts, contact, feet_pos, yaw, limits)

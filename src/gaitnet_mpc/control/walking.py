@@ -31,8 +31,9 @@ Design notes (each setting of :class:`WalkingConfig` says why it has its value):
   the step (double support) and the low-level controller maps its wrench through ``J^T``
   instead of pressing it into the ground with the swing PD. Scheduled touchdowns are
   slightly early by design (the swing ends 5 mm below the ground at 0.3 m/s), so without
-  this every step began with an uncontrolled braking impulse. (Waiting for a late foot is
-  implemented but off, see ``late_touchdown_timeout_s``.)
+  this every step began with an uncontrolled braking impulse. A foot still in the air
+  when its stance begins is not waited for: the other foot swings on schedule (waiting
+  up to 0.03-0.09 s turned a survived 56 N x 0.2 s backward push into a sideways fall).
 * **Swing overshoot compensation.** The measured touchdown error of the PD-tracked swing
   foot is averaged and subtracted from later swing targets.
 * **Bent-knee walking height and stance-leg gravity feedforward**, so the knee never locks
@@ -70,9 +71,6 @@ from gaitnet_mpc.geometry import heading_axes, rotate2, to_heading2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
-#: A late foot is lowered towards this depth below the ground [m] until it touches down.
-LATE_DEPTH_M = 0.03
-
 
 @dataclass(frozen=True)
 class WalkingConfig:
@@ -102,13 +100,6 @@ class WalkingConfig:
     # it is what catching a 10 N s sideways push needs (0.30 m was not enough).
     max_lateral_separation_m: float = 0.40
     early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
-    # Late touchdown: if the landing foot is still in the air when its stance begins, the
-    # other foot keeps standing (and carries the MPC wrench) while the landing foot keeps
-    # descending, for at most this long; then the other foot swings in the time left.
-    # Off by default: with 0.09 s (or 0.03 s) a backward push of 56 N x 0.2 s, survived
-    # without it, ended in a sideways fall - the compressed swing that follows lands
-    # short sideways. With the fixed step time, stepping on schedule works better here.
-    late_touchdown_timeout_s: float = 0.0
     min_swing_s: float = 0.08  # a shorter swing is skipped (the foot stays down)
     # Forward/backward reach of a foothold from the CoM predicted at touchdown (heading
     # frame): about the hip's reach with the knee still bent at walking height. A foothold
@@ -202,7 +193,6 @@ class WalkingController(WalkingBase):
         self.foothold = dict(self.foot_pos)
         self.swing: SwingTrajectory | None = None
         self.landed = False  # the swing foot touched down early (stance for the rest)
-        self.late = False  # the stance foot has not touched down yet (the other stands)
         self.swing_t0_s = 0.0  # time in the step at which the swing trajectory starts
         self.aim: dict[str, np.ndarray] = {}  # swing target of a foot not yet landed
         self.landing = LandingBias(
@@ -213,7 +203,7 @@ class WalkingController(WalkingBase):
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         foot = self.schedule.swing_foot
-        if self.swing is None or self.landed or self.late:
+        if self.swing is None or self.landed:
             return []
         return [(foot, self.foothold[foot].copy())]
 
@@ -345,27 +335,14 @@ class WalkingController(WalkingBase):
         stance = sched.stance_foot
         self._steps.append(sched.current_step_duration_s)
         self.landed = False
-        self.late = sched.step_index > 0 and not state.foot_contact[stance]
         self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
-        if self.late:
-            # Keep the other foot down until this one lands (see ``_end_late``).
-            self.swing = None
-            aim = self.aim.get(stance, state.foot_pos_world_m[stance])
-            self.late_xy = aim[:2].copy()  # where its swing was aimed
+        if sched.step_index > 0 and not state.foot_contact[stance]:
+            # Landing late: not waited for (module docstring). Its landing is not measured,
+            # the other foot's foothold starts from where it stands, the MPC replans now.
             self.foothold[sched.swing_foot] = state.foot_pos_world_m[sched.swing_foot].copy()
             self.next_replan_s = -np.inf
-            return
-        if sched.step_index > 0:
+        elif sched.step_index > 0:
             self._measure_landing(state, stance)  # it did not touch down early
-        self._start_swing(state)
-
-    def _end_late(self, state: RobotState) -> None:
-        """The late foot landed (or the wait timed out): the other foot now swings."""
-        self.late = False
-        stance = self.schedule.stance_foot
-        if state.foot_contact[stance]:
-            self._measure_landing(state, stance)
-            self.foot_pos[stance] = state.foot_pos_world_m[stance].copy()
         self._start_swing(state)
 
     def _update_foothold(self, state: RobotState) -> None:
@@ -404,13 +381,7 @@ class WalkingController(WalkingBase):
             self._on_step_start(state)
         self._update_path(state)
         swing, stance = sched.swing_foot, sched.stance_foot
-        if self.late:
-            if (
-                state.foot_contact[stance]
-                or sched.time_in_step_s >= self.config.late_touchdown_timeout_s
-            ):
-                self._end_late(state)
-        elif (
+        if (
             not self.landed
             and sched.phase_in_step >= self.config.early_touchdown_phase
             and state.foot_contact[swing]
@@ -426,19 +397,12 @@ class WalkingController(WalkingBase):
         wrench = {}
         planned = self._wrenches_now(state)
         if planned is not None:
-            if self.late:
+            wrench[stance] = planned[FEET.index(stance)]
+            if self.landed:
                 wrench[swing] = planned[FEET.index(swing)]
-            else:
-                wrench[stance] = planned[FEET.index(stance)]
-                if self.landed:
-                    wrench[swing] = planned[FEET.index(swing)]
         target = {}
-        if self.late:  # keep lowering the late foot straight down until it lands
-            z = self.ground_z + self.robot.spec.foot_contact_radius_m - LATE_DEPTH_M
-            v = np.array([0.0, 0.0, -self.config.swing.touchdown_speed_mps])
-            target[stance] = (np.array([*self.late_xy, z]), v)
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
-        if not self.late and not self.landed and self.swing is not None:
+        if not self.landed and self.swing is not None:
             t_swing = sched.time_in_step_s - self.swing_t0_s
             p_swing = self.swing.position(t_swing)
             if yaw is not None:
