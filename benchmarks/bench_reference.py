@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from common import machine_info
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig
 from gaitnet_mpc.kinematics import leg_geometries, whole_body_ik
 from gaitnet_mpc.kinematics.reference import (
@@ -25,7 +26,6 @@ from gaitnet_mpc.kinematics.reference import (
     update_reference,
 )
 from gaitnet_mpc.robots import FEET, load_robot
-from machine import machine_info
 
 REPS = 2000
 WARMUP = 50

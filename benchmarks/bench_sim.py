@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
+from common import machine_info
 from gaitnet_mpc.control.stand import StandController
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import load_course
-from machine import machine_info
 
 SIM_SECONDS = 2.0
 REPEATS = 3

@@ -29,7 +29,7 @@ from functools import partial
 
 import numpy as np
 
-from machine import clean_run, machine_info, run_pool, write_report
+from common import clean_run, machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -39,42 +39,29 @@ Job = tuple[str, str, int | None]  # controller ("gaitnet" or "kd@<dt>"), course
 
 
 def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
-    from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.registry import ControllerContext, controller_config, make_controller
-    from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.runner.episode import run_episode
-    from gaitnet_mpc.sim.simulator import Simulator
-    from gaitnet_mpc.terrain import load_course
+    from gaitnet_mpc.scenario import make_scenario, run_scenario
 
     name, course_name, seed = job
-    robot, command = load_robot("humanoid3d"), Command(VX_MPS)
-    course = load_course(course_name, **({} if seed is None else {"seed": seed}))
-    config = controller_config("kd", planar=False, overrides=overrides)
-    if name.startswith("gaitnet"):
-        from gaitnet_mpc.control.gaitnet_walk import GaitNetWalkController, load_gaitnet
-        from gaitnet_mpc.control.kd_walk_config import walk_terrain
-        from gaitnet_mpc.gaitnet.policy import GaitNetPolicyConfig
-
-        policy = GaitNetPolicyConfig()  # as shipped; gaitnet:r0 = no limit, gaitnet:rK = K
+    extra: list[str] = []
+    kw: dict = {}
+    if name.startswith("gaitnet"):  # as shipped; gaitnet:r0 = no limit, gaitnet:rK = K
+        kw = {"controller": "gaitnet", "gaitnet_weights": weights}
         if ":r" in name:
             k = int(name.split(":r")[1])
-            policy = GaitNetPolicyConfig(max_retimes=k if k > 0 else None)
-        ctrl = GaitNetWalkController(
-            robot,
-            walk_terrain(course, config),
-            command,
-            load_gaitnet(robot, weights),
-            config,
-            policy,
-        )
+            extra = [f"dt_policy.gaitnet.max_retimes={k if k > 0 else 'none'}"]
     elif name == "oracle":
-        ctrl = make_controller("oracle", ControllerContext(robot, course, command, config=config))
+        kw = {"controller": "oracle"}
     else:
-        dt = float(name.split("@")[1])
-        ctx = ControllerContext(robot, course, command, {"dt_s": dt}, config)
-        ctrl = make_controller("kd", ctx)
-    duration = FLAT_S if course_name == "flat" else SEEDED_S
-    s = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
+        kw = {"controller": "kd", "dt_s": float(name.split("@")[1])}
+    scenario = make_scenario(
+        course=course_name,
+        course_seed=seed,
+        vx_mps=VX_MPS,
+        duration_s=FLAT_S if course_name == "flat" else SEEDED_S,
+        overrides=(*overrides, *extra),
+        **kw,
+    )
+    s = run_scenario(scenario)
     policy = s.get("dt_policy") or {}
     dts = [d["dts_s"][-1] for d in policy.get("steps", [])]
     return {
@@ -92,8 +79,6 @@ def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
 
 
 def main() -> None:
-    from gaitnet_mpc.control.registry import controller_config
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--dts", default="0.045,0.055,0.065", help="kd's fixed dts [s]")
@@ -123,7 +108,9 @@ def main() -> None:
     jobs += [(n, c, s) for n in names for c in courses for s in seeds]
     use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
     overrides = tuple(args.overrides)  # a bad one fails here, before any episode
-    multi_step = controller_config("kd", planar=False, overrides=overrides).preview is not None
+    from gaitnet_mpc.scenario import make_scenario
+
+    multi_step = make_scenario(controller="kd", overrides=overrides).config.preview is not None
     preview = "multi-step preview (`--preview`)" if multi_step else "one-step preview"
     t0 = time.perf_counter()
     worker = partial(run, weights=args.weights, overrides=overrides)

@@ -11,7 +11,7 @@ import argparse
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from machine import machine_info
+from common import machine_info
 
 # (label, robot, course, vx [m/s], fixed dt [s], duration [s], multi-step preview)
 Scenario = tuple[str, str, str, float, float, float, bool]
@@ -41,27 +41,20 @@ PRESETS = ("default", "paper")
 
 
 def run(job: tuple[str, Scenario]) -> dict:
-    from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import KD_PRESETS, preview_walk_config, walk_terrain
-    from gaitnet_mpc.mpc.sequential import FixedDt
-    from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.runner.episode import run_episode
-    from gaitnet_mpc.sim.simulator import Simulator
-    from gaitnet_mpc.terrain import load_course
+    from gaitnet_mpc.scenario import make_scenario, run_scenario
 
     preset, (label, robot_name, course_name, vx, dt, duration, preview) = job
-    robot = load_robot(robot_name)
-    course = load_course(course_name)
-    command = Command(vx_mps=vx)
-    config = KD_PRESETS[preset](robot.spec.planar)
-    if preview:
-        config = preview_walk_config(config)
-    ctrl = KDWalkController(
-        robot, walk_terrain(course, config), command, dt_policy=FixedDt(dt), config=config
+    scenario = make_scenario(
+        robot=robot_name,
+        controller="kd",
+        course=course_name,
+        vx_mps=vx,
+        duration_s=duration,
+        preset=preset,
+        dt_s=dt,
+        preview=preview,
     )
-    summary = run_episode(Simulator(robot, course), ctrl, command, duration, progress=False)
-    return {"label": label, "preset": preset, **summary}
+    return {"label": label, "preset": preset, **run_scenario(scenario)}
 
 
 def main() -> None:

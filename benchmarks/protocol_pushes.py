@@ -19,7 +19,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from machine import machine_info
+from common import machine_info
 
 RESULTS = Path(__file__).parent / "results" / "protocol_pushes.md"
 VX_MPS = 0.5
@@ -29,22 +29,16 @@ DT_S = 0.045
 def episode(controller: str, seed: int, duration_s: float, first_push_s: float) -> dict:
     """One pushed episode: survival, fall time, pushes received before the fall."""
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.registry import ControllerContext, make_controller
-    from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.scenario import make_scenario, run_scenario
     from gaitnet_mpc.sim.disturbances import protocol_pushes
-    from gaitnet_mpc.sim.simulator import SimConfig, Simulator
-    from gaitnet_mpc.terrain import load_course
 
-    robot = load_robot("humanoid3d")
-    course = load_course("flat")
-    command = Command(vx_mps=VX_MPS)
-    ctrl = make_controller(controller, ControllerContext(robot, course, command, {"dt_s": DT_S}))
     pushes = protocol_pushes(seed, first_push_s, duration_s)
-    sim = Simulator(robot, course, SimConfig(pushes=pushes))
+    dt = {"dt_s": DT_S} if controller in ("kd", "srbm", "wbmpc") else {}
+    scenario = make_scenario(
+        controller=controller, vx_mps=VX_MPS, duration_s=duration_s, pushes=pushes, **dt
+    )
     t0 = time.perf_counter()
-    summary = run_episode(sim, ctrl, command, duration_s, progress=False)
+    summary = run_scenario(scenario)
     t_end = summary["fall_time_s"] if summary["fell"] else duration_s
     return {
         "controller": controller,

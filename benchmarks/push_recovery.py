@@ -36,7 +36,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from machine import machine_info
+from common import machine_info
 
 RESULTS = Path(__file__).parent / "results" / "push_recovery.md"
 CONTROLLERS = ("stand", "srbm", "kd", "gaitnet")
@@ -80,31 +80,30 @@ def phase_value(name: str) -> float:
 
 def episode(controller_name: str, direction: str, phase: str | None, force_n: float) -> dict:
     """One pushed episode; returns its row of the raw-outcome CSV."""
-    from gaitnet_mpc.command import Command
-    from gaitnet_mpc.control.registry import ControllerContext, make_controller
-    from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.dt_policy import NOMINAL_DT_S
+    from gaitnet_mpc.scenario import build_episode, make_scenario, run_scenario
     from gaitnet_mpc.sim.disturbances import Push
-    from gaitnet_mpc.sim.simulator import SimConfig, Simulator
-    from gaitnet_mpc.terrain import load_course
 
-    robot = load_robot("humanoid3d")
-    course = load_course("flat")
-    command = Command(vx_mps=0.0 if controller_name == "stand" else WALK_VX_MPS)
-    ctrl = make_controller(controller_name, ControllerContext(robot, course, command, {}))
-    sched = getattr(ctrl, "schedule", None)
-    if phase is None or sched is None:
+    if phase is None or controller_name == "stand":
         push_t = SETTLE_S
-    else:
-        step_s = sched.config.stages_per_step * sched.config.default_dt_s
+    else:  # every walking controller starts with 5-stage steps of the nominal dt
+        step_s = 5 * NOMINAL_DT_S
         k = math.ceil(SETTLE_S / step_s - 1e-9)
         push_t = k * step_s + phase_value(phase) * step_s
     ux, uy = DIRECTIONS[direction]
     pushes = (Push(push_t, (ux * force_n, uy * force_n, 0.0), PUSH_DUR_S),) if force_n > 0 else ()
-    sim = Simulator(robot, course, SimConfig(pushes=pushes))
+    scenario = make_scenario(
+        controller=controller_name,
+        vx_mps=0.0 if controller_name == "stand" else WALK_VX_MPS,
+        duration_s=push_t + PUSH_DUR_S + AFTER_S,
+        pushes=pushes,
+    )
+    episode_ = build_episode(scenario)
+    sim = episode_.sim
+    sched = getattr(episode_.controller, "schedule", None)  # stand has none
     t0 = time.perf_counter()
     try:
-        summary = run_episode(sim, ctrl, command, push_t + PUSH_DUR_S + AFTER_S, progress=False)
+        summary = run_scenario(scenario, episode=episode_)
     except Exception as exc:  # the controller gave up during the episode: a failure
         summary = {"fell": True, "fall_time_s": sim.time_s, "fall_reason": f"exception: {exc!r}"}
     wall = time.perf_counter() - t0
@@ -180,13 +179,6 @@ def run_cell(cell: Cell) -> dict:
         "runs": [runs[i] for i in sorted(runs)],
         "wall_s": time.perf_counter() - t0,
     }
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def _git_state() -> str:
@@ -397,8 +389,10 @@ def main() -> None:
     writer.writeheader()
     for r in sorted(results, key=lambda r: (r["controller"], r["direction"], r["phase"] or "")):
         writer.writerows(r["runs"])
-    _write_atomic(args.out.with_suffix(".csv"), buf.getvalue())
-    _write_atomic(args.out, text)
+    from gaitnet_mpc.results.io import write_atomic
+
+    write_atomic(args.out.with_suffix(".csv"), buf.getvalue())
+    write_atomic(args.out, text)
     print(text)
 
 

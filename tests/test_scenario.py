@@ -39,7 +39,7 @@ def test_controller_name_sets_the_dt_policy_and_a_mismatch_is_refused() -> None:
     kd = make_scenario(controller="kd", dt_s=0.055)
     assert kd.config.dt_policy.kind == "fixed" and kd.config.dt_policy.dt_s == 0.055
     assert make_scenario(controller="oracle").config.dt_policy.kind == "oracle"
-    with pytest.raises(ConfigError, match="dt_policy.kind"):
+    with pytest.raises(ConfigError, match=r"dt_policy\.kind"):
         make_scenario(controller="kd", overrides=("dt_policy.kind=gaitnet",))
     with pytest.raises(ConfigError, match="--gaitnet-weights"):
         make_scenario(controller="kd", gaitnet_weights="humanoid3d-wbmpc")

@@ -1,27 +1,21 @@
-"""``benchmarks/soak.py`` on a few tiny episodes: the report is written, its counts add up,
-a finished soak resumes without rerunning anything, and a failing episode is recorded with
-its replayable spec instead of stopping the soak."""
+"""The soak engine (``benchmarks/soak.py``) on a few tiny episodes: the report is written,
+its counts add up, a finished soak resumes without rerunning anything, and a failing
+episode is recorded with its replayable spec instead of stopping the soak."""
 
 from __future__ import annotations
 
 import importlib
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-
 
 @pytest.fixture(scope="module")
-def soak() -> Iterator[ModuleType]:
-    """The ``soak`` benchmark module (``benchmarks/`` is not a package: it is put on the
-    path for this module's tests only, where the spawned workers find it too)."""
-    with pytest.MonkeyPatch.context() as mp:
-        mp.syspath_prepend(str(BENCHMARKS))
-        yield importlib.import_module("soak")
+def soak() -> ModuleType:
+    """The soak engine (``benchmarks/soak.py`` is its command line)."""
+    return importlib.import_module("gaitnet_mpc.experiments.soak")
 
 
 def _table_rows(report: str) -> list[list[str]]:

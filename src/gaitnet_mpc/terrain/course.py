@@ -18,8 +18,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitnet_mpc.errors import CourseFormatError
-from gaitnet_mpc.terrain import bounds, json_format
+from gaitnet_mpc.terrain.bounds import reachable_foothold_bounds
 from gaitnet_mpc.terrain.fields import EPS_M, check_foot, finite_number, layout_seed
+from gaitnet_mpc.terrain.json_format import (
+    course_fields_from_dict,
+    course_to_dict,
+    read_course_json,
+)
 from gaitnet_mpc.terrain.patch import Obstacle, Patch, top_patch_index
 
 
@@ -102,7 +107,7 @@ class Course:
 
         Errors name the offending field as a path, e.g. ``patches[2].x``.
         """
-        return cls(**json_format.course_fields_from_dict(d, default_name=default_name))
+        return cls(**course_fields_from_dict(d, default_name=default_name))
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON-ready dict; ``Course.from_dict(c.to_dict()) == c``.
@@ -110,14 +115,12 @@ class Course:
         ``start_xy`` is written only when it is not the default (0, 0), ``seed`` only when
         it is not None.
         """
-        return json_format.course_to_dict(
-            self.name, self.patches, self.obstacles, self.start_xy, self.seed
-        )
+        return course_to_dict(self.name, self.patches, self.obstacles, self.start_xy, self.seed)
 
     @classmethod
     def from_json(cls, path: str | Path) -> Course:
         """Read and validate a course file; ``name`` defaults to the file stem."""
-        data = json_format.read_course_json(path)
+        data = read_course_json(path)
         return cls.from_dict(data, default_name=Path(path).stem)
 
     # ------------------------------------------------------------------ point queries
@@ -174,7 +177,7 @@ class Course:
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
         """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step
         preview), on this course's patches: :func:`.bounds.reachable_foothold_bounds`."""
-        return bounds.reachable_foothold_bounds(
+        return reachable_foothold_bounds(
             self.patches,
             p_com_td_xy,
             foot,

@@ -1,4 +1,7 @@
-"""Machine and version header shared by the benchmark reports."""
+"""What the benchmark scripts share: the machine and version header, one process pool, one
+report writer, and what counts as a clean run. Every episode is a scenario
+(:func:`gaitnet_mpc.scenario.make_scenario`, :func:`~gaitnet_mpc.scenario.run_scenario`);
+before/after timing against a git revision is ``gaitnet-mpc bench --baseline REV``."""
 
 from __future__ import annotations
 
@@ -20,10 +23,12 @@ def clean_run(summary: dict[str, Any]) -> bool:
 
 
 def write_report(name: str, report: str) -> None:
-    """Write ``report`` to ``benchmarks/results/<name>`` atomically and print it."""
+    """Write ``report`` to ``benchmarks/results/<name>`` atomically (a path with a folder:
+    there) and print it."""
     from gaitnet_mpc.results.io import write_atomic
 
-    write_atomic(Path(__file__).parent / "results" / name, report)
+    path = Path(name) if Path(name).parent != Path() else Path(__file__).parent / "results" / name
+    write_atomic(path, report)
     print(report)
 
 
@@ -36,7 +41,10 @@ def run_pool(fn: Callable[..., Any], jobs: list[Any], workers: int) -> dict[Any,
     with ProcessPoolExecutor(workers) as pool:
         futures = {pool.submit(fn, job): job for job in jobs}
         for n, fut in enumerate(as_completed(futures), 1):
-            results[futures[fut]] = fut.result()
+            try:
+                results[futures[fut]] = fut.result()
+            except Exception as exc:
+                raise RuntimeError(f"job {futures[fut]!r} failed: {exc!r}") from exc
             print(f"\r{n}/{len(jobs)} episodes", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
     return results
