@@ -44,6 +44,8 @@ ORACLE_GRID_STEP_S = 0.005
 
 #: The dt policies, by the name :class:`DtPolicyConfig` ``kind`` takes.
 DT_POLICIES = ("fixed", "gaitnet", "oracle", "drawn")
+#: The controller that runs each policy (``drawn``: ``kd`` as the data-collection teacher).
+CONTROLLER_OF_POLICY = {"fixed": "kd", "drawn": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
 
 
 def paper_dt_bounds_s(planar: bool) -> tuple[float, float]:

@@ -27,6 +27,7 @@ from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
 from gaitnet_mpc.control.walking_base import WalkingBase
+from gaitnet_mpc.dt_policy import CONTROLLER_OF_POLICY
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import (
     GaitScheduleConfig,
@@ -63,10 +64,6 @@ def _kd_raibert(planar: bool) -> RaibertHeuristic:
             max_lateral_separation_m=0.0 if planar else 0.30,
         )
     )
-
-
-#: The controller name of each dt policy kind.
-CONTROLLER_OF_POLICY = {"fixed": "kd", "drawn": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
 
 
 class KDWalkController(WalkingBase):

@@ -11,6 +11,7 @@ from typing import Any
 from gaitnet_mpc import config as configio
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.control.terrain_view import TerrainView
+from gaitnet_mpc.dt_policy import CONTROLLER_OF_POLICY
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.terrain import Course
@@ -34,7 +35,9 @@ class ControllerContext:
 KD_FAMILY = ("kd", "gaitnet", "oracle")
 POLICY_OF_CONTROLLER = {"kd": "fixed", "gaitnet": "gaitnet", "oracle": "oracle"}
 #: The dt policies each of them may run (``drawn``: the data-collection teacher).
-POLICIES_OF_CONTROLLER = {"kd": ("fixed", "drawn"), "gaitnet": ("gaitnet",), "oracle": ("oracle",)}
+POLICIES_OF_CONTROLLER = {
+    name: tuple(k for k, c in CONTROLLER_OF_POLICY.items() if c == name) for name in KD_FAMILY
+}
 
 
 def config_type(name: str) -> type | None:
