@@ -1,23 +1,21 @@
 """Timing of the kinematics kernels used by the kino-dynamic MPC (plain script, no pytest).
 
-Run: ``.venv/bin/python benchmarks/bench_kinematics.py [--reps 2000]``. Prints a Markdown
-table (median and 90th percentile per call, in microseconds, ``time.perf_counter``) and
-writes it to ``benchmarks/results/kinematics.md``.
+Run: ``.venv/bin/python benchmarks/bench_kinematics.py [--reps 2000] [--out NAME]``. Prints
+a Markdown table (median and 90th percentile per call, in microseconds,
+``time.perf_counter``) and writes it to ``benchmarks/results/kinematics.md``.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import platform
-import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
+from common import add_out_option, machine_info, write_report
 from gaitnet_mpc.kinematics import (
     centroidal_map,
     centroidal_map_dot,
@@ -31,7 +29,6 @@ from gaitnet_mpc.kinematics import (
 from gaitnet_mpc.robots import load_robot
 
 HORIZON = 10  # MPC stages (paper Table V: h = 10)
-RESULTS = Path(__file__).resolve().parent / "results" / "kinematics.md"
 
 
 def time_us(fn: Callable[[], object], reps: int, warmup: int = 50) -> tuple[float, float]:
@@ -46,34 +43,12 @@ def time_us(fn: Callable[[], object], reps: int, warmup: int = 50) -> tuple[floa
     return float(np.median(samples_s) * 1e6), float(np.percentile(samples_s, 90) * 1e6)
 
 
-def cpu_model() -> str:
-    """``platform.processor()``, or the model name from /proc/cpuinfo where that is empty."""
-    name = platform.processor()
-    cpuinfo = Path("/proc/cpuinfo")
-    if not name and cpuinfo.exists():
-        for line in cpuinfo.read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return name or "unknown"
-
-
-def machine_info() -> list[str]:
-    return [
-        f"- platform: {platform.platform()}",
-        f"- processor: {cpu_model()} ({platform.machine()})",
-        f"- cpu_count: {os.cpu_count()}",
-        f"- python: {sys.version.split()[0]}",
-        f"- numpy: {np.__version__}",
-        f"- pinocchio: {pin.__version__}",
-        f"- load average at start: {', '.join(f'{x:.2f}' for x in os.getloadavg())}",
-    ]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--reps", type=int, default=2000, help="timed calls per kernel")
+    add_out_option(parser, "kinematics.md")
     args = parser.parse_args()
-    info = machine_info()
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
     robot = load_robot("humanoid3d")
     model = robot.pin_model
@@ -144,16 +119,13 @@ def main() -> None:
             "from `benchmarks/bench_kinematics.py`. The first row (one small NumPy "
             "operation) calibrates the machine: the IK kernels cost about 100-150 of them.",
             "",
-            *info,
+            f"{machine_info(('numpy', 'pin'))}; load average at start: {load}.",
             "",
             *rows,
             "",
         ]
     )
-    print(text)
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(text)
-    print(f"written to {RESULTS}")
+    write_report(args.out, text)
 
 
 if __name__ == "__main__":

@@ -1,21 +1,22 @@
 """Cost of the reference trajectory f_ref (make_reference) and its update f_IK
 (update_reference), h = 10, humanoid3d, walking at 0.4 m/s.
 
-Run: ``.venv/bin/python benchmarks/bench_reference.py`` (writes ``results/reference.md``).
+Run: ``.venv/bin/python benchmarks/bench_reference.py [--reps 2000] [--out NAME]`` (writes
+``results/reference.md``).
 Single-threaded wall-clock time per call (``time.perf_counter``); the kernels are measured
 interleaved (A B C A B C ...) so that their ratios hold on a shared, noisy machine.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
-from common import machine_info
+from common import add_out_option, machine_info, write_report
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig
 from gaitnet_mpc.kinematics import leg_geometries, whole_body_ik
 from gaitnet_mpc.kinematics.reference import (
@@ -27,7 +28,6 @@ from gaitnet_mpc.kinematics.reference import (
 )
 from gaitnet_mpc.robots import FEET, load_robot
 
-REPS = 2000
 WARMUP = 50
 
 
@@ -99,6 +99,10 @@ def _time(kernels: dict[str, Callable[[], object]], reps: int) -> dict[str, np.n
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--reps", type=int, default=2000, help="timed calls per kernel")
+    add_out_option(parser, "reference.md")
+    args = parser.parse_args()
     load = os.getloadavg()
     rows = [
         "| kernel (humanoid3d, h = 10) | com_iterations | median [us] | p90 [us] | min [us] "
@@ -110,39 +114,39 @@ def main() -> None:
         kernels = _setup(cfg)
         if iters == 0:
             kernels = {k: v for k, v in kernels.items() if k.startswith("update")}
-        times = _time(kernels, REPS if iters == 1 else REPS // 2)
+        times = _time(kernels, args.reps if iters == 1 else args.reps // 2)
         for name, t in times.items():
             us = t * 1e6
             rows.append(
                 f"| {name} | {iters} | {np.median(us):.0f} | {np.percentile(us, 90):.0f} "
                 f"| {us.min():.0f} | {us.size} |"
             )
-    report = "\n".join(
-        [
-            "# Reference trajectory (f_ref, f_IK) timings",
-            "",
-            f"{machine_info()}",
-            "",
-            f"Load average at start: {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f}. A shared "
-            "2-core VM whose speed drifts by up to 1.5x between runs: compare rows of one "
-            "run (interleaved), e.g. against the whole_body_ik row; min = the unloaded floor.",
-            "",
-            "Setup: humanoid3d standing pose, gait schedule 0.06 s into step 0 (partial "
-            "first stage, the horizon spans three steps), command 0.4 m/s, h = 10 "
-            "(11 boundaries). The update moves every foothold and CoM iterate by "
-            "N(0, 1 cm) noise; 'new dt' also scales every stage by 1.1 (Gait-Net). "
-            "`com_iterations` = trunk fixed-point corrections = extra whole-body IK calls "
-            "(default 1). One call = IK (1 + com_iterations times) + (h + 1) CoM / "
-            "centroidal-momentum evaluations + finite differences + H. 'turning': yaw-rate "
-            "command, so the IK also solves the hip yaw for the foot headings.",
-            "",
-            *rows,
-            "",
-        ]
+    write_report(
+        args.out,
+        "\n".join(
+            [
+                "# Reference trajectory (f_ref, f_IK) timings",
+                "",
+                f"{machine_info()}",
+                "",
+                f"Load average at start: {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f}. A shared "
+                "2-core VM whose speed drifts by up to 1.5x between runs: compare rows of one "
+                "run (interleaved), e.g. against the whole_body_ik row; min = the unloaded floor.",
+                "",
+                "Setup: humanoid3d standing pose, gait schedule 0.06 s into step 0 (partial "
+                "first stage, the horizon spans three steps), command 0.4 m/s, h = 10 "
+                "(11 boundaries). The update moves every foothold and CoM iterate by "
+                "N(0, 1 cm) noise; 'new dt' also scales every stage by 1.1 (Gait-Net). "
+                "`com_iterations` = trunk fixed-point corrections = extra whole-body IK calls "
+                "(default 1). One call = IK (1 + com_iterations times) + (h + 1) CoM / "
+                "centroidal-momentum evaluations + finite differences + H. 'turning': yaw-rate "
+                "command, so the IK also solves the hip yaw for the foot headings.",
+                "",
+                *rows,
+                "",
+            ]
+        ),
     )
-    out = Path(__file__).parent / "results" / "reference.md"
-    out.write_text(report)
-    print(report)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from functools import partial
 
 import numpy as np
 
-from common import clean_run, machine_info, run_pool, write_report
+from common import clean_run, command_line, machine_info, run_pool, write_report
 
 SEEDED_S = 8.0
 FLAT_S = 20.0
@@ -78,6 +78,12 @@ def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
     }
 
 
+def _describe(job: Job, r: dict) -> str:
+    name, course, seed = job
+    state = "clean" if r["clean"] else "fell" if r["fell"] else "not clean"
+    return f"{name} {course} seed {seed}: {state}, {r['distance_m']:.2f} m"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
@@ -114,7 +120,7 @@ def main() -> None:
     preview = "multi-step preview (`--preview`)" if multi_step else "one-step preview"
     t0 = time.perf_counter()
     worker = partial(run, weights=args.weights, overrides=overrides)
-    results: dict[Job, dict] = run_pool(worker, jobs, args.jobs)
+    results: dict[Job, dict] = run_pool(worker, jobs, args.jobs, describe=_describe)
     wall_s = time.perf_counter() - t0
     lines = [
         "# gaitnet beside kd at fixed dts",
@@ -153,14 +159,8 @@ def main() -> None:
             )
     lines += [
         "",
-        f"{len(jobs)} episodes in {wall_s / 60:.1f} min on {args.jobs} processes. Command: "
-        f"`.venv/bin/python benchmarks/gaitnet_runs.py --seeds {args.seeds} --dts '{args.dts}' "
-        f"--courses {args.courses} --variants '{args.variants}' --seed-offset {args.seed_offset}"
-        + (" --no-flat" if args.no_flat else "")
-        + (" --no-gaitnet" if args.no_gaitnet else "")
-        + "".join(f" --set {o}" for o in overrides)
-        + (f" --out {args.out}" if args.out else "")
-        + (f" --weights {args.weights}`." if args.weights else "`."),
+        f"{len(jobs)} episodes in {wall_s / 60:.1f} min on {args.jobs} processes. "
+        f"Command: `{command_line()}`.",
         "",
     ]
     name = args.out or ("gaitnet_runs_tuning.md" if args.seed_offset else "gaitnet_runs.md")

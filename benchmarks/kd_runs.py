@@ -1,17 +1,17 @@
 """Closed-loop outcomes of the ``kd`` controller (issue: implicit kino-dynamic MPC).
 
-Runs every scenario of the acceptance matrix through :func:`run_episode` (the code path of
-``gaitnet-mpc run``) and writes ``benchmarks/results/kd_runs.md``. Scenarios run in a
-process pool (``--jobs``, default 2). Run: ``.venv/bin/python benchmarks/kd_runs.py``.
+Runs every scenario of the acceptance matrix with :func:`run_scenario` (the code path of
+``gaitnet-mpc run``) and writes ``benchmarks/results/kd_runs.md`` (``--out``). Scenarios
+run in a process pool (``--jobs``, default 2). Run:
+``.venv/bin/python benchmarks/kd_runs.py [--only LABEL] [--max-duration S] [--out NAME]``
+(``--only`` and ``--max-duration``: a quick check of a few short scenarios).
 """
 
 from __future__ import annotations
 
 import argparse
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
-from common import machine_info
+from common import add_out_option, command_line, machine_info, run_pool, write_report
 
 # (label, robot, course, vx [m/s], fixed dt [s], duration [s], multi-step preview)
 Scenario = tuple[str, str, str, float, float, float, bool]
@@ -40,16 +40,16 @@ SCENARIOS: tuple[Scenario, ...] = (
 PRESETS = ("default", "paper")
 
 
-def run(job: tuple[str, Scenario]) -> dict:
+def run(job: tuple[str, Scenario, float]) -> dict:
     from gaitnet_mpc.scenario import make_scenario, run_scenario
 
-    preset, (label, robot_name, course_name, vx, dt, duration, preview) = job
+    preset, (label, robot_name, course_name, vx, dt, duration, preview), max_s = job
     scenario = make_scenario(
         robot=robot_name,
         controller="kd",
         course=course_name,
         vx_mps=vx,
-        duration_s=duration,
+        duration_s=min(duration, max_s),
         preset=preset,
         dt_s=dt,
         preview=preview,
@@ -60,10 +60,18 @@ def run(job: tuple[str, Scenario]) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--only", default="", help="scenarios whose label contains this")
+    parser.add_argument("--presets", default=",".join(PRESETS))
+    parser.add_argument("--max-duration", type=float, default=float("inf"), help="cap [s]")
+    add_out_option(parser, "kd_runs.md")
     args = parser.parse_args()
-    jobs = [(preset, scenario) for scenario in SCENARIOS for preset in PRESETS]
-    with ProcessPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(run, jobs))
+    jobs = [
+        (preset, scenario, args.max_duration)
+        for scenario in SCENARIOS
+        if args.only in scenario[0]
+        for preset in args.presets.split(",")
+    ]
+    results = run_pool(run, jobs, args.jobs, describe=lambda j, r: f"{r['label']} {r['preset']}")
     lines = [
         "# kd controller: closed-loop outcomes",
         "",
@@ -78,7 +86,7 @@ def main() -> None:
         "QPs/full solve | QPs/replan | full ms (median) | replan ms (median) | hit j_max | RTF |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for r in results:
+    for r in results.values():
         m = r["mpc"]
         rmse = r["speed_rmse_mps"]
         hit = 1.0 - m.get("converged_fraction", float("nan"))
@@ -99,18 +107,13 @@ def main() -> None:
         "",
         "Commands: the same scenario with the CLI is `gaitnet-mpc run --controller kd "
         "--robot ROBOT --course COURSE --vx VX --dt DT --duration T [--preview] "
-        "[--preset paper]`. This table: `.venv/bin/python benchmarks/kd_runs.py --jobs 2`.",
+        f"[--preset paper]`. This table: `{command_line()}`.",
         "",
         "Solve times and RTF are wall times on a shared machine and move with its load; "
         "`results/kd_solve.md` compares solver versions in one interleaved run.",
         "",
     ]
-    report = "\n".join(lines)
-    out = Path(__file__).parent / "results" / "kd_runs.md"
-    tmp = out.with_suffix(".md.part")
-    tmp.write_text(report)
-    tmp.replace(out)
-    print(report)
+    write_report(args.out, "\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ direction, for 0.2 s (:func:`gaitnet_mpc.sim.disturbances.protocol_pushes`, one 
 episode; every controller gets the same pushes for a seed). An episode survives when it
 does not fall within ``--duration-s``. Controllers run in a process pool (``--jobs``).
 
-Writes ``benchmarks/results/protocol_pushes.md``. Run:
+Writes ``benchmarks/results/protocol_pushes.md`` (``--out``). Run:
 ``MUJOCO_GL=egl .venv/bin/python benchmarks/protocol_pushes.py --seeds 10 --jobs 2``.
 """
 
@@ -16,18 +16,16 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
-from common import machine_info
+from common import add_out_option, command_line, machine_info, run_pool, write_report
 
-RESULTS = Path(__file__).parent / "results" / "protocol_pushes.md"
 VX_MPS = 0.5
 DT_S = 0.045
 
 
-def episode(controller: str, seed: int, duration_s: float, first_push_s: float) -> dict:
+def episode(job: tuple[str, int, float, float]) -> dict:
     """One pushed episode: survival, fall time, pushes received before the fall."""
+    controller, seed, duration_s, first_push_s = job
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     from gaitnet_mpc.scenario import make_scenario, run_scenario
     from gaitnet_mpc.sim.disturbances import protocol_pushes
@@ -52,6 +50,11 @@ def episode(controller: str, seed: int, duration_s: float, first_push_s: float) 
     }
 
 
+def _describe(job: tuple, row: dict) -> str:
+    state = "survived" if not row["fell"] else f"fell at {row['fall_time_s']:.2f} s"
+    return f"{row['controller']} seed {row['seed']}: {state}"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--controllers", default="wbmpc,kd,srbm")
@@ -59,15 +62,11 @@ def main() -> None:
     parser.add_argument("--duration-s", type=float, default=12.0)
     parser.add_argument("--first-push-s", type=float, default=2.0)
     parser.add_argument("--jobs", type=int, default=2)
+    add_out_option(parser, "protocol_pushes.md")
     args = parser.parse_args()
     names = args.controllers.split(",")
     jobs = [(c, s, args.duration_s, args.first_push_s) for c in names for s in range(args.seeds)]
-    rows: list[dict] = []
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        for row in pool.map(episode, *zip(*jobs, strict=True)):
-            rows.append(row)
-            state = "survived" if not row["fell"] else f"fell at {row['fall_time_s']:.2f} s"
-            print(f"{row['controller']} seed {row['seed']}: {state}", flush=True)
+    rows = list(run_pool(episode, jobs, args.jobs, describe=_describe).values())
     lines = [
         "# Survival under the data-collection protocol's pushes",
         "",
@@ -76,8 +75,7 @@ def main() -> None:
         f"humanoid3d, flat, vx {VX_MPS} m/s, MPC dt {DT_S} s, {args.duration_s:g} s per "
         f"episode, pushes of 10-100 N for 0.2 s in a random horizontal direction every 2 s "
         f"from t = {args.first_push_s:g} s (seeds 0-{args.seeds - 1}; the same pushes for "
-        "every controller). Command: `.venv/bin/python benchmarks/protocol_pushes.py "
-        f"--seeds {args.seeds} --duration-s {args.duration_s:g}`.",
+        f"every controller). Command: `{command_line()}`.",
         "",
         "| controller | survived | pushes received (mean) | falls at [s] | wall per episode [s] |",
         "|---|---|---|---|---|",
@@ -97,8 +95,7 @@ def main() -> None:
         for r in rows
         if r["fell"]
     ] or ["- none"]
-    RESULTS.write_text("\n".join(lines) + "\n")
-    print(f"wrote {RESULTS}")
+    write_report(args.out, "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -15,8 +15,9 @@ smaller force (monotonicity). The ends of the range are run only when the bisect
 reaches them. ``--spot-check`` (default on, off with ``--quick``) also runs half the
 survived force as a check of that assumption. Cells run in a process pool (``--jobs``).
 
-Writes ``benchmarks/results/push_recovery.md`` (table) and ``push_recovery.csv`` (one row
-per episode). Run: ``MUJOCO_GL=egl .venv/bin/python benchmarks/push_recovery.py --jobs 2``
+Writes ``benchmarks/results/push_recovery.md`` (table; ``--out``) and the CSV beside it
+(one row per episode). Run:
+``MUJOCO_GL=egl .venv/bin/python benchmarks/push_recovery.py --jobs 2``
 (``--quick``: phase ``early``, directions ``fwd,left``, 20 N resolution). ``gaitnet``
 chooses its own dts, so its push times come from its nominal dt; the measured phase is in
 the CSV.
@@ -28,17 +29,10 @@ import argparse
 import csv
 import io
 import math
-import os
-import shlex
-import subprocess
-import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
 
-from common import machine_info
+from common import add_out_option, command_line, machine_info, run_pool, write_report
 
-RESULTS = Path(__file__).parent / "results" / "push_recovery.md"
 CONTROLLERS = ("stand", "srbm", "kd", "gaitnet")
 #: direction name -> unit force direction (world x, y)
 DIRECTIONS = {"fwd": (1.0, 0.0), "bwd": (-1.0, 0.0), "left": (0.0, 1.0), "right": (0.0, -1.0)}
@@ -181,26 +175,6 @@ def run_cell(cell: Cell) -> dict:
     }
 
 
-def _git_state() -> str:
-    """Commit of the working tree, and whether tracked files differ from it."""
-    root = Path(__file__).resolve().parent.parent
-    try:
-        head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=root,
-            capture_output=True,
-            text=True,
-        ).stdout.strip()
-    except OSError:
-        return "commit unknown"
-    if not head:
-        return "commit unknown"
-    return f"commit {head}" + (" with uncommitted changes to tracked files" if dirty else "")
-
-
 def _cell_text(r: dict | None) -> tuple[str, str]:
     """(survived force / impulse, first failing force) of one table cell."""
     if r is None:
@@ -247,7 +221,7 @@ def report(results: list[dict], args: argparse.Namespace, wall_s: float) -> str:
     lines = [
         "# Push recovery: largest push survived",
         "",
-        f"{machine_info(('numpy', 'mujoco', 'pin', 'piqp'))}, {_git_state()}.",
+        f"{machine_info(('numpy', 'mujoco', 'pin', 'piqp'))}.",
         f"Run {time.strftime('%Y-%m-%d')}, wall time {wall_s / 60:.1f} min with "
         f"{args.jobs} jobs on a shared machine.",
         "",
@@ -309,13 +283,14 @@ def report(results: list[dict], args: argparse.Namespace, wall_s: float) -> str:
             f"kd vs srbm (survived force): {'; '.join(parts)}. kd survives less than the SRBM "
             f"baseline in {weaker} of {compared} cells" + (" (a finding)." if weaker else "."),
         ]
-    argv = [os.path.relpath(sys.executable), *sys.argv]
-    lines += [
-        "",
-        f"Command: `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')} {shlex.join(argv)}`.",
-        "",
-    ]
+    lines += ["", f"Command: `{command_line()}`.", ""]
     return "\n".join(lines)
+
+
+def _describe(cell: Cell, r: dict) -> str:
+    surv, failed = _cell_text({**r, "f_max": cell[3]})
+    c, d, p = cell[:3]
+    return f"{c} {d} {p or '-'}: survived {surv}, failed {failed} ({len(r['runs'])} episodes)"
 
 
 def main() -> None:
@@ -328,7 +303,7 @@ def main() -> None:
     parser.add_argument("--f-max", type=float, default=300.0)
     parser.add_argument("--resolution", type=float, default=None, help="default 5 N")
     parser.add_argument("--spot-check", action=argparse.BooleanOptionalAction, default=None)
-    parser.add_argument("--out", type=Path, default=RESULTS, help="markdown; CSV beside it")
+    add_out_option(parser, "push_recovery.md")  # the CSV beside it
     args = parser.parse_args()
     args.controllers = args.controllers.split(",")
     default_dirs, default_phases = (
@@ -359,25 +334,21 @@ def main() -> None:
     ]
     t0 = time.perf_counter()
     results, errors = [], []
-    with ProcessPoolExecutor(args.jobs) as pool:
-        futures = [pool.submit(run_cell, cell) for cell in cells]
-        for n_done, f in enumerate(as_completed(futures), 1):
-            try:
-                r = f.result()
-            except Exception as exc:  # setup failed (e.g. a broken import): report, go on
-                c, d, p = cells[futures.index(f)][:3]
-                r = {"controller": c, "direction": d, "phase": p, "error": repr(exc)}
-                r.update(runs=[], wall_s=0.0)
-                errors.append(f"{c} {d} {p or '-'}: {exc!r}")
-            r["f_max"] = args.f_max
-            results.append(r)
-            surv, failed = _cell_text(r)
-            print(
-                f"[{n_done}/{len(cells)}] {r['controller']} {r['direction']} {r['phase'] or '-'}: "
-                f"survived {surv}, failed {failed} ({len(r['runs'])} episodes, "
-                f"{r['wall_s']:.0f} s)",
-                flush=True,
-            )
+    for cell, r in run_pool(
+        run_cell, cells, args.jobs, describe=_describe, keep_errors=True
+    ).items():
+        if isinstance(r, Exception):  # setup failed (e.g. a broken import): report, go on
+            c, d, p = cell[:3]
+            r = {
+                "controller": c,
+                "direction": d,
+                "phase": p,
+                "error": str(r).splitlines()[0],
+                "runs": [],
+            }
+            errors.append(f"{c} {d} {p or '-'}: {r['error']}")
+        r["f_max"] = args.f_max
+        results.append(r)
     wall = time.perf_counter() - t0
     text = report(results, args, wall)
     if errors:
@@ -389,11 +360,8 @@ def main() -> None:
     writer.writeheader()
     for r in sorted(results, key=lambda r: (r["controller"], r["direction"], r["phase"] or "")):
         writer.writerows(r["runs"])
-    from gaitnet_mpc.results.io import write_atomic
-
-    write_atomic(args.out.with_suffix(".csv"), buf.getvalue())
-    write_atomic(args.out, text)
-    print(text)
+    path = write_report(args.out, text)
+    write_report(path.with_suffix(".csv"), buf.getvalue(), echo=False)
 
 
 if __name__ == "__main__":

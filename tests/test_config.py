@@ -13,6 +13,7 @@ from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.registry import controller_config
 from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig
+from gaitnet_mpc.dt_policy import DtPolicyConfig, GaitNetPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.preview import PreviewConfig
 from gaitnet_mpc.mpc.contact import ContactParams
@@ -23,7 +24,8 @@ from gaitnet_mpc.mpc.sequential import SequentialConfig
 def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
     """``kd_walk.paper_walk_config`` as it was before the presets became TOML files, with
     the CoP over the whole foot (``cop_fraction`` 1, added to the preset when the default
-    became 0.6)."""
+    became 0.6) and Gait-Net's safeguards off (Algorithm 1 as printed; the registry did
+    this for ``gaitnet --preset paper`` until the dt policy became part of the settings)."""
     if planar:
         kd = KDConfig(
             w_momentum=(20.0,) * 6,
@@ -40,6 +42,7 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
         keep_feet_apart=False,
         lateral_return_time_s=None,
         cop_fraction=1.0,
+        dt_policy=DtPolicyConfig(gaitnet=GaitNetPolicyConfig(safeguards=False)),
     )
 
 

@@ -215,7 +215,7 @@ def test_each_step_starts_its_iterations_from_the_nominal_dt(humanoid, carry_dt:
         state = sim.state()
     starts = [d.start_dt_s for d in policy.decisions]
     assert len(starts) >= 3
-    assert all(d.dts_s[-1] == pytest.approx(0.06) for d in ctrl.policy.decisions)
+    assert all(d.dts_s[-1] == pytest.approx(0.06) for d in policy.decisions)
     expected = [0.045] + [0.06 if carry_dt else 0.045] * (len(starts) - 1)
     np.testing.assert_allclose(starts, expected)
 

@@ -136,7 +136,9 @@ class KDWalkController(WalkingBase):
 
     def dt_policy_summary(self) -> dict[str, Any] | None:
         policy = self.dt_policy
-        return policy.summary() if isinstance(policy, GaitNetDt | OracleDt) else None
+        if isinstance(policy, GaitNetDt):
+            return {**policy.summary(), "weights": policy.weights_info()}
+        return policy.summary() if isinstance(policy, OracleDt) else None
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:

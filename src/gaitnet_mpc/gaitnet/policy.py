@@ -96,12 +96,6 @@ class GaitNetDt:
         from gaitnet_mpc.dataset.schema import FEATURE_NAMES
 
         self._columns = [FEATURE_NAMES.index(n) for n in net.feature_names]
-        self.weights_info = {
-            "teacher": net.spec.teacher,
-            "data_manifest_sha256": net.spec.data_manifest_sha256,
-            "features": list(net.feature_names),
-            "members": net.spec.members,
-        }
         self.decisions: list[Decision] = []
         self._problem: KDProblem | None = None
 
@@ -167,6 +161,16 @@ class GaitNetDt:
             return False
         return bool(steps[0] * steps[1] < 0 and steps[1] * steps[2] < 0)
 
+    def weights_info(self) -> dict[str, Any]:
+        """Where the network came from (``summary.json``'s ``dt_policy.weights``)."""
+        spec = self.net.spec
+        return {
+            "teacher": spec.teacher,
+            "data_manifest_sha256": spec.data_manifest_sha256,
+            "features": list(self.net.feature_names),
+            "members": spec.members,
+        }
+
     def summary(self) -> dict[str, Any]:
         """``summary.json``'s ``dt_policy`` block: counts and every decision."""
         n = len(self.decisions)
@@ -180,5 +184,4 @@ class GaitNetDt:
             "dt_bounds_s": list(self.bounds_s),
             "calls_per_decision_mean": float(np.mean(iters)) if iters else None,
             "steps": [d.to_dict() for d in self.decisions],
-            "weights": self.weights_info,
         }
