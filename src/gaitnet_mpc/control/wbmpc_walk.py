@@ -167,7 +167,7 @@ class WBWalkController(WalkingBase):
         self.config = config or WBWalkConfig()
         c = self.config
         # CasADi's bundled OpenBLAS would spread IPOPT's linear algebra over every core for
-        # no gain at this size (benchmarks/wbmpc_solvers.py); it reads this at first use.
+        # no gain at this size (benchmarks/results/wbmpc.md); it reads this at first use.
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
         lo, hi = c.mpc.dt_min_s, c.mpc.dt_max_s
         schedule = GaitScheduleConfig(

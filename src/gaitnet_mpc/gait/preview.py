@@ -27,9 +27,9 @@ alternate and each later step lasts ``stages_per_step * dt``: the fixed dt of th
 policy. Each stage is integrated exactly (``cosh``/``sinh``), so the dynamics are linear
 equalities. Positions are world x (the course axis) and y.
 
-``benchmarks/lip_stones.py`` runs the sagittal part over the whole
-``stepping-stones`` course: with dt 0.045-0.07 s it has solutions at near-constant speed,
-so the fixed-dt baseline can cross in principle.
+A study of the sagittal part over the whole ``stepping-stones`` course
+(``benchmarks/results/lip_stones.md``) found solutions at near-constant speed with dt
+0.045-0.07 s, so the fixed-dt baseline can cross in principle.
 """
 
 from __future__ import annotations

@@ -69,7 +69,7 @@ class WholeBodyMPC:
     ``solve(problem, warm_start)`` returns a :class:`WBSolution`; ``shift(solution)`` makes
     the warm start of the next receding-horizon call. Run it with ``OPENBLAS_NUM_THREADS=1``:
     CasADi's bundled OpenBLAS otherwise spreads IPOPT's MUMPS over every core for no gain
-    at this size (``benchmarks/wbmpc_solvers.py``).
+    at this size (``benchmarks/results/wbmpc.md``).
     """
 
     def __init__(
