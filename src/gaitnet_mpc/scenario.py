@@ -397,17 +397,15 @@ def _push_text(p: Push) -> str:
     return f"t={p.t_s:g},fx={fx:g},fy={fy:g},fz={fz:g},dur={p.duration_s:g}"
 
 
-def scenario_meta(
-    scenario: Scenario, controller: Controller, warnings: list[str]
-) -> dict[str, Any]:
+def scenario_meta(episode: Episode, warnings: list[str]) -> dict[str, Any]:
     """The fields of ``summary.json`` that say what was run."""
-    s = scenario
+    s = episode.scenario
     return {
         "warnings": warnings,
         "robot": s.robot,
         "controller": s.controller,
         "controller_options": dict(s.origin),
-        "course": load_scenario_course(s).name,
+        "course": episode.course.name,
         "command": s.command.to_dict(),
         "pushes": [
             {"t_s": p.t_s, "force_n": list(p.force_world_n), "dur_s": p.duration_s}
@@ -415,7 +413,7 @@ def scenario_meta(
         ],
         "payload_kg": s.payload_kg,
         "seed": s.course_seed,
-        "terrain_knowledge": controller.terrain_knowledge(),
+        "terrain_knowledge": episode.controller.terrain_knowledge(),
     }
 
 
@@ -473,7 +471,7 @@ def run_scenario(
     if out is not None:
         write_scenario_files(scenario, out)
     warnings = [*scenario_warnings(scenario), *extra_warnings]
-    meta = scenario_meta(scenario, episode.controller, warnings)
+    meta = scenario_meta(episode, warnings)
     viewer = viewer_factory(episode.sim) if viewer_factory is not None else None
     try:
         return run_episode(
