@@ -123,3 +123,15 @@ def test_solve_counts_read_the_failed_solves_of_the_mpc_stats(soak: ModuleType) 
 
     assert counts == {"solves": 3, "unconverged": 2, "qp_failures": 1}
     assert soak._solve_counts(None) == {"solves": 0, "unconverged": 0, "qp_failures": 0}
+
+
+def test_long_profile_draws_20_s_on_seeded_courses_with_pushes(soak: ModuleType) -> None:
+    settings = soak.DrawSettings(seed=0, profile="long")
+    specs = [soak.draw_episode(settings, i) for i in range(40)]
+
+    assert {s.duration_s for s in specs} == {soak.LONG_DURATION_S}
+    assert {s.course for s in specs} == set(soak.LONG_COURSES)
+    assert all(s.course_seed is not None and 1 <= len(s.pushes) <= 3 for s in specs)
+    assert "--profile long" in settings.command_flags()
+    # the profile is part of the draw: the short profile of the same seed differs
+    assert soak.draw_episode(soak.DrawSettings(seed=0), 0) != specs[0]

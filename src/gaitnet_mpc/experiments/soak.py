@@ -79,6 +79,14 @@ PUSH_START_S = 0.2  # no push before [s]
 PAYLOAD_PROBABILITY = 0.5
 PAYLOAD_RANGE_KG = (0.0, 3.0)  # within both robots' bound (their own mass: 16 / 10 kg)
 
+#: The draw profiles: ``short`` (1-5 s on every built-in course, flat included) and
+#: ``long`` (20 s on a random layout of a seeded course, stones, gaps or uneven tiles, with
+#: 1-3 pushes; the soak of issue 37).
+PROFILES = ("short", "long")
+LONG_DURATION_S = 20.0
+LONG_COURSES = ("gap", "stepping-stones", "uneven")
+LONG_PUSH_COUNT_PROBABILITIES = (0.0, 0.4, 0.35, 0.25)  # 1, 2 or 3 pushes
+
 #: How each controller handles a failed solve (for the report).
 FAILURE_HANDLING = {
     "kd": "QPSolveError caught in KDWalkController._solve: the last good plan is kept",
@@ -150,11 +158,13 @@ class DrawSettings:
         seed: base seed; episode K uses ``numpy.random.default_rng([seed, K])``.
         controllers: the controllers drawn from (weights of :data:`CONTROLLER_WEIGHTS`).
         max_duration_s: cap on every drawn duration [s] (None: no cap).
+        profile: one of :data:`PROFILES`.
     """
 
     seed: int = 0
     controllers: tuple[str, ...] = tuple(CONTROLLER_WEIGHTS)
     max_duration_s: float | None = None
+    profile: str = "short"
 
     def __post_init__(self) -> None:
         from gaitnet_mpc.errors import ConfigError
@@ -170,6 +180,8 @@ class DrawSettings:
             math.isfinite(self.max_duration_s) and self.max_duration_s >= 0.01
         ):
             raise ConfigError("--max-duration-s", self.max_duration_s, "a duration >= 0.01 s")
+        if self.profile not in PROFILES:
+            raise ConfigError("--profile", self.profile, f"one of {list(PROFILES)}")
 
     def to_dict(self) -> dict[str, Any]:
         return {**asdict(self), "controllers": list(self.controllers)}
@@ -181,6 +193,8 @@ class DrawSettings:
             flags += f" --controllers {','.join(self.controllers)}"
         if self.max_duration_s is not None:
             flags += f" --max-duration-s {self.max_duration_s:g}"
+        if self.profile != "short":
+            flags += f" --profile {self.profile}"
         return flags
 
 
@@ -193,13 +207,20 @@ def draw_episode(settings: DrawSettings, index: int) -> EpisodeSpec:
     weights = np.array([CONTROLLER_WEIGHTS[n] for n in names])
     controller = names[int(rng.choice(len(names), p=weights / weights.sum()))]
     robot = ROBOT_NAMES[int(rng.integers(len(ROBOT_NAMES)))]
-    others = sorted(c for c in BUILTIN_COURSES if c != "flat")
-    course = "flat" if rng.random() < FLAT_PROBABILITY else others[int(rng.integers(len(others)))]
-    course_seed = None
-    if course in SEEDED_COURSES and rng.random() < RANDOM_LAYOUT_PROBABILITY:
-        course_seed = int(rng.integers(2**31))
-    lo, hi = WBMPC_DURATION_RANGE_S[robot] if controller == "wbmpc" else DURATION_RANGE_S
-    duration_s = round(float(rng.uniform(lo, hi)), 2)
+    long = settings.profile == "long"
+    if long:
+        course = LONG_COURSES[int(rng.integers(len(LONG_COURSES)))]
+        course_seed: int | None = int(rng.integers(2**31))
+        duration_s = LONG_DURATION_S
+    else:
+        others = sorted(c for c in BUILTIN_COURSES if c != "flat")
+        flat = rng.random() < FLAT_PROBABILITY
+        course = "flat" if flat else others[int(rng.integers(len(others)))]
+        course_seed = None
+        if course in SEEDED_COURSES and rng.random() < RANDOM_LAYOUT_PROBABILITY:
+            course_seed = int(rng.integers(2**31))
+        lo, hi = WBMPC_DURATION_RANGE_S[robot] if controller == "wbmpc" else DURATION_RANGE_S
+        duration_s = round(float(rng.uniform(lo, hi)), 2)
     if settings.max_duration_s is not None:
         duration_s = min(duration_s, settings.max_duration_s)
     vx = vy = yaw_rate = 0.0
@@ -209,7 +230,8 @@ def draw_episode(settings: DrawSettings, index: int) -> EpisodeSpec:
             vy = round(float(rng.uniform(-VY_MAX_MPS, VY_MAX_MPS)), 2)
             yaw_rate = round(float(rng.uniform(-YAW_RATE_MAX_RADPS, YAW_RATE_MAX_RADPS)), 2)
     pushes = []
-    n_pushes = int(rng.choice(len(PUSH_COUNT_PROBABILITIES), p=PUSH_COUNT_PROBABILITIES))
+    counts = LONG_PUSH_COUNT_PROBABILITIES if long else PUSH_COUNT_PROBABILITIES
+    n_pushes = int(rng.choice(len(counts), p=counts))
     for _ in range(n_pushes):
         t_s = round(float(rng.uniform(PUSH_START_S, max(duration_s, PUSH_START_S))), 3)
         force_n = float(rng.uniform(*PUSH_FORCE_RANGE_N))
@@ -541,6 +563,15 @@ def make_report(
         )
     lines += ["", "How a failed solve is handled:", ""]
     lines += [f"- {name}: {FAILURE_HANDLING[name]}" for name in sorted(by_controller)]
+    handled = [r for r in rows if r["qp_failures"]]
+    if handled:
+        lines += ["", "## QP failures handled, by episode", ""]
+        lines += [
+            f"- episode {r['index']} ({EpisodeSpec.from_dict(r['spec']).label()}): "
+            f"{r['qp_failures']} of {r['solves']} solves"
+            + (f", then fell ({r['fall_reason']})" if r["fell"] else ", no fall")
+            for r in handled
+        ]
     failing = [r for r in rows if _failing(r)]
     lines += ["", "## Episodes to replay", ""]
     if not failing:
@@ -687,13 +718,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="controllers to draw from (default: %(default)s)",
     )
     parser.add_argument("--max-duration-s", type=float, default=None, help="cap on durations")
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default="short",
+        help="short: 1-5 s on every course; long: 20 s on seeded stones, gaps, uneven tiles "
+        "with 1-3 pushes (default: %(default)s)",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS / "soak.md")
     parser.add_argument("--work-dir", type=Path, default=None, help="default: --out's folder")
     parser.add_argument("--replay", type=int, default=None, metavar="K", help="run episode K")
     args = parser.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the workers
     settings = DrawSettings(
-        args.seed, tuple(c for c in args.controllers.split(",") if c), args.max_duration_s
+        args.seed,
+        tuple(c for c in args.controllers.split(",") if c),
+        args.max_duration_s,
+        args.profile,
     )
     if args.replay is not None:
         return replay(settings, args.replay)
