@@ -338,3 +338,18 @@ def test_compare_out_pointing_at_a_file_is_a_named_error(
     a_file.write_text("x")
     assert main(["compare", str(stand_video_run), "--out", str(a_file)]) == 2
     assert "--out" in capsys.readouterr().err and a_file.read_text() == "x"
+
+
+def test_named_errors_survive_pickling() -> None:
+    """A worker's named error reaches the parent process as itself (issue 37)."""
+    import pickle
+
+    from gaitnet_mpc.errors import ConfigError, CourseFormatError, QPSolveError
+
+    for err in (
+        ConfigError("--set", "a=b", "a known key"),
+        CourseFormatError("patches[0].x", [1, 0], "x_min < x_max"),
+        QPSolveError("piqp", "max_iter", "after 200 iterations"),
+    ):
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is type(err) and str(back) == str(err)

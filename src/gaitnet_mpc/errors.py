@@ -23,6 +23,11 @@ class ConfigError(GaitNetMPCError, ValueError):
         self.expected = expected
         super().__init__(f"{field}: got {value!r}, expected {expected}")
 
+    def __reduce__(self) -> tuple[type, tuple[str, object, str]]:
+        # picklable with its own constructor's arguments, so that an error raised in a
+        # pool worker reaches the parent as itself (not as a BrokenProcessPool)
+        return (type(self), (self.field, self.value, self.expected))
+
 
 class CourseFormatError(ConfigError):
     """A terrain course (JSON file or dict) is malformed."""
@@ -34,5 +39,9 @@ class QPSolveError(GaitNetMPCError, RuntimeError):
     def __init__(self, backend: str, status: str, detail: str = "") -> None:
         self.backend = backend
         self.status = status
+        self.detail = detail
         msg = f"QP backend {backend!r} failed with status {status!r}"
         super().__init__(f"{msg}: {detail}" if detail else msg)
+
+    def __reduce__(self) -> tuple[type, tuple[str, str, str]]:
+        return (type(self), (self.backend, self.status, self.detail))
