@@ -276,14 +276,18 @@ def test_a_folder_with_a_run_is_refused_unless_overwrite(tmp_path: Path, capsys)
 
 
 def test_default_run_folders_are_unique(tmp_path: Path, monkeypatch) -> None:
-    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
+    from gaitnet_mpc.results.outdir import claim_output_folder
+    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS
 
     monkeypatch.chdir(tmp_path)
-    made = {
-        prepare_output_folder(None, option="--out", default_prefix="", artifacts=RUN_ARTIFACTS)
-        for _ in range(3)
-    }
+    made = set()
+    for _ in range(3):
+        with claim_output_folder(
+            None, option="--out", default_prefix="", artifacts=RUN_ARTIFACTS
+        ) as out:
+            made.add(out)
     assert len(made) == 3 and all(p.is_dir() and p.parent.name == "runs" for p in made)
+    assert not any(any(p.iterdir()) for p in made)  # the lock file is gone with the lock
 
 
 def test_duration_under_a_few_ticks_is_refused(tmp_path: Path, capsys) -> None:

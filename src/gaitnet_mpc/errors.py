@@ -45,3 +45,18 @@ class QPSolveError(GaitNetMPCError, RuntimeError):
 
     def __reduce__(self) -> tuple[type, tuple[str, str, str]]:
         return (type(self), (self.backend, self.status, self.detail))
+
+
+class PartialFailure(GaitNetMPCError):
+    """Part of a long job failed (e.g. sets of ``collect`` whose workers raised); what did
+    not fail is on disk, and ``log`` holds each failure with its traceback."""
+
+    def __init__(self, what: str, failed: list[str], log: str) -> None:
+        self.what = what
+        self.failed = list(failed)
+        self.log = log
+        listed = ", ".join(self.failed[:5]) + (", ..." if len(self.failed) > 5 else "")
+        super().__init__(f"{what}: {len(self.failed)} failed ({listed}); see {log}")
+
+    def __reduce__(self) -> tuple[type, tuple[str, list[str], str]]:
+        return (type(self), (self.what, self.failed, self.log))

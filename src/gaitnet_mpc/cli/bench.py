@@ -62,24 +62,15 @@ def add_parser(sub: Any) -> None:
         "--out",
         type=Path,
         default=Path("runs/perf.md"),
-        help="report file (default: %(default)s; benchmarks/results/perf.md for the record)",
+        help="report file, new unless --overwrite (default: %(default)s; "
+        "benchmarks/results/perf.md for the record)",
     )
+    b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
 
 
 def main(args: argparse.Namespace) -> int:
-    import shlex
-
-    from gaitnet_mpc.experiments.bench import (
-        DEFAULT_CASES,
-        EpisodeSpec,
-        build_case,
-        parse_case,
-        perf_markdown,
-        profiled_episode,
-        run_bench,
-        timed_episode,
-    )
-    from gaitnet_mpc.results.io import write_atomic
+    from gaitnet_mpc.experiments.bench import DEFAULT_CASES, EpisodeSpec, build_case, parse_case
+    from gaitnet_mpc.results.outdir import claim_output_file
 
     cases = [parse_case(c) for c in args.case] if args.case else list(DEFAULT_CASES)
     spec = EpisodeSpec(args.course, args.vx, args.seconds)
@@ -93,6 +84,23 @@ def main(args: argparse.Namespace) -> int:
         memory_case = cases[labels.index(args.memory_case)]
     for case in cases:  # bad controller names or overrides fail here, before any timing
         build_case(case, spec)
+    with claim_output_file(args.out, option="--out", overwrite=args.overwrite, what="bench"):
+        return _bench(args, cases, spec, memory_case)
+
+
+def _bench(args: argparse.Namespace, cases: list[Any], spec: Any, memory_case: Any) -> int:
+    """Time ``cases`` and write the report (``--out`` is claimed)."""
+    import shlex
+
+    from gaitnet_mpc.experiments.bench import EpisodeSpec as Spec
+    from gaitnet_mpc.experiments.bench import (
+        perf_markdown,
+        profiled_episode,
+        run_bench,
+        timed_episode,
+    )
+    from gaitnet_mpc.results.io import write_atomic
+
     if args.baseline is not None:
         first = cases[0]
         old = replace(first, label=f"{first.label} @ {args.baseline}", revision=args.baseline)
@@ -112,7 +120,7 @@ def main(args: argparse.Namespace) -> int:
         say(f"memory: {memory_case.label}, {args.memory_seconds:g} s simulated in place")
         memory = timed_episode(
             memory_case,
-            EpisodeSpec(args.course, 0.0, args.memory_seconds),
+            Spec(args.course, 0.0, args.memory_seconds),
             on_second=lambda t: say(f"  {t:.0f} s") if round(t) % 60 == 0 else None,
             record_ticks=False,
         )

@@ -18,18 +18,23 @@ def add_parser(sub: Any) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    import sys
 
     from gaitnet_mpc.results.compare import compare_runs
-    from gaitnet_mpc.results.rundir import COMPARE_ARTIFACTS, prepare_output_folder
+    from gaitnet_mpc.results.outdir import claim_output_folder
+    from gaitnet_mpc.results.rundir import COMPARE_ARTIFACTS, load_run
 
-    out = prepare_output_folder(
+    runs = [load_run(p) for p in args.run_dirs]  # every input is checked before --out
+    with claim_output_folder(
         args.out,
         option="--out",
         default_prefix="compare-",
         artifacts=COMPARE_ARTIFACTS,
         overwrite=True,  # a comparison is cheap to remake; its own files are replaced
-    )
-    paths = compare_runs(args.run_dirs, out)
-    print(paths["markdown"].read_text(), end="")
+    ) as out:
+        result = compare_runs(runs, out)
+    for text in result["warnings"]:
+        print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
+    print(result["markdown"].read_text(), end="")
     print(f"results in {out}/")
     return 0

@@ -1,8 +1,16 @@
 """``gaitnet-mpc``: the parser of every sub-command, and the exit codes.
 
-Exit codes: 0 done (a run that ends in a fall is done: its outcome line says FELL), 2 bad
-input (a named error: field, value, what was expected), 130 interrupted (Ctrl-C or
-SIGTERM; what was finished is on disk).
+Exit codes (:data:`EXIT_CODES`, listed in ``--help`` and the README):
+
+* 0 done;
+* 1 the robot fell (``run``; ``--allow-fall`` makes a fall exit 0);
+* 2 bad input: a named error (field, value, what was expected), found before any work;
+* 3 part of the work failed (e.g. a set of ``collect`` raised in its worker): what did
+  not fail is on disk, the failures are in the job's log and ``status.json``;
+* 4 internal error: an exception this package did not expect (a bug; the traceback is
+  printed);
+* 130 interrupted (Ctrl-C or SIGTERM, at any time, start-up included): what was
+  finished is on disk, ``status.json`` says what is left, the same command resumes.
 """
 
 from __future__ import annotations
@@ -12,12 +20,22 @@ import os
 import sys
 from types import ModuleType
 
-from gaitnet_mpc.errors import GaitNetMPCError
+from gaitnet_mpc.errors import GaitNetMPCError, PartialFailure
 
 #: The sub-commands, in the order ``--help`` lists them: name -> module of ``cli/``.
 COMMANDS = ("run", "plot", "compare", "collect", "train", "reproduce", "bench", "dataset")
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
+EXIT_OK, EXIT_FELL, EXIT_BAD_INPUT, EXIT_PART_FAILED, EXIT_INTERNAL = 0, 1, 2, 3, 4
+EXIT_INTERRUPTED = 130
+#: Every exit code and what it means (``--help``, README).
+EXIT_CODES: dict[int, str] = {
+    EXIT_OK: "done",
+    EXIT_FELL: "the robot fell (run; --allow-fall: 0)",
+    EXIT_BAD_INPUT: "bad input (a named error, before any work)",
+    EXIT_PART_FAILED: "part of the work failed (see the job's log and status.json)",
+    EXIT_INTERNAL: "internal error (a bug: the traceback is printed)",
+    EXIT_INTERRUPTED: "interrupted (Ctrl-C / SIGTERM; what was done is kept, rerun to resume)",
+}
 
 
 def _module(name: str) -> ModuleType:
@@ -32,12 +50,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     modules = {name: _module(name) for name in COMMANDS}
     summary = "\n".join(f"  {name:<10} {modules[name].SUMMARY}" for name in COMMANDS)
+    codes = "\n".join(f"  {code:<10} {text}" for code, text in EXIT_CODES.items())
     parser = argparse.ArgumentParser(
         prog="gaitnet-mpc",
         description="Gait-Net-augmented implicit kino-dynamic MPC for variable-frequency "
         "humanoid walking over discrete terrain (MuJoCo).",
-        epilog=f"sub-commands:\n{summary}\n\nexit codes: 0 done (a run that falls is done; "
-        "its last line says FELL), 2 bad input, 130 interrupted.\n"
+        epilog=f"sub-commands:\n{summary}\n\nexit codes:\n{codes}\n\n"
         "`gaitnet-mpc SUB-COMMAND --help` for each one's options.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -49,32 +67,37 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one sub-command; return its exit code (:data:`EXIT_CODES`)."""
+    from gaitnet_mpc.parallel import stop_signals_as_keyboard_interrupt
+
     # Offscreen rendering backend; must be chosen before mujoco is first imported.
     os.environ.setdefault("MUJOCO_GL", "egl")
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
-        args = build_parser().parse_args(argv)
-    except KeyboardInterrupt:
-        print("gaitnet-mpc: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    args.argv = argv
-    command = _module(args.cmd)
-    try:
-        if args.cmd == "run":
-            # SIGTERM and SIGINT stop a run like Ctrl-C, from start-up through plotting
-            from gaitnet_mpc.parallel import stop_signals_as_keyboard_interrupt
-
-            with stop_signals_as_keyboard_interrupt():
-                return int(command.main(args))
-        return int(command.main(args))
+        # SIGTERM stops every command as Ctrl-C does, from start-up through its last write
+        with stop_signals_as_keyboard_interrupt():
+            args = build_parser().parse_args(argv)
+            args.argv = argv
+            return int(_module(args.cmd).main(args))
+    except PartialFailure as exc:
+        print(f"gaitnet-mpc: {exc}", file=sys.stderr)
+        return EXIT_PART_FAILED
     except GaitNetMPCError as exc:
         print(f"gaitnet-mpc: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        # Ctrl-C outside the simulation loop (start-up, plotting, training); what a
-        # command had finished is already on disk (every file is written atomically)
+        # what a command had finished is already on disk (every file is written atomically)
         print("gaitnet-mpc: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Exception:
+        import traceback
+
+        traceback.print_exc()
+        print(
+            "gaitnet-mpc: internal error (a bug, please report it with the traceback above)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -16,9 +16,13 @@ def add_parser(sub: Any) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from gaitnet_mpc.results.outdir import folder_lock
     from gaitnet_mpc.results.plots import make_plots
+    from gaitnet_mpc.results.rundir import load_run
 
-    written = make_plots(args.run_dir)
+    load_run(args.run_dir)  # a named error for anything but a readable run folder
+    with folder_lock(args.run_dir, option="RUN_DIR"):  # not while a run writes it
+        written = make_plots(args.run_dir)
     for path in written:
         print(path)
     if not written:

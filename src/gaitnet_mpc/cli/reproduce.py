@@ -25,7 +25,18 @@ def add_parser(sub: Any) -> None:
         default=Path("data/gaitnet-kd-humanoid3d"),
         help="data-set folder (default: %(default)s)",
     )
-    rep.add_argument("--out", type=Path, default=None, help="default: runs/<what>")
+    rep.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="results folder (default: runs/<what>); table2 resumes the work an interrupted "
+        "run left in it",
+    )
+    rep.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="table1: replace the results in an existing --out",
+    )
     rep.add_argument(
         "--problems",
         type=int,
@@ -40,21 +51,71 @@ def add_parser(sub: Any) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from gaitnet_mpc.experiments import reproduce
+    import shlex
 
-    out = args.out if args.out is not None else Path("runs") / args.what
+    from gaitnet_mpc.experiments import reproduce
+    from gaitnet_mpc.results.outdir import check_output_path, folder_lock, write_status
+
+    out = check_output_path(args.out if args.out is not None else Path("runs") / args.what, "--out")
     if args.what == "table2":
-        report = reproduce.table2(
-            out,
-            args.problems,
-            with_joint_space=not args.no_joint_space,
-            progress=lambda n, total: print(
-                f"\rsolved {n}/{total} problems", end="", file=sys.stderr, flush=True
-            ),
-        )
-        print(file=sys.stderr)
+        reproduce.check_problems(args.problems)
     else:
-        report = reproduce.table1(args.data, out)
+        from gaitnet_mpc.dataset.check import check_dataset
+
+        check_dataset(args.data)
+    command = shlex.join(["gaitnet-mpc", *args.argv])
+    with folder_lock(out, what="reproduce"):
+        _check_folder(out, args.what, args.overwrite)
+        write_status(out, command=command, state="running", todo=[args.what])
+        try:
+            if args.what == "table2":
+                report = reproduce.table2(
+                    out,
+                    args.problems,
+                    with_joint_space=not args.no_joint_space,
+                    progress=lambda n, total: print(
+                        f"\rsolved {n}/{total} problems", end="", file=sys.stderr, flush=True
+                    ),
+                )
+                print(file=sys.stderr)
+            else:
+                report = reproduce.table1(args.data, out)
+        except KeyboardInterrupt:
+            resume = args.what in reproduce.RESUMABLE
+            note = "run the same command again to resume" if resume else "run it again"
+            write_status(
+                out,
+                command=command,
+                state="interrupted",
+                exit_code=130,
+                todo=[args.what],
+                note=note,
+            )
+            raise
+        write_status(out, command=command, state="done", exit_code=0, done=[args.what])
     print(report.read_text(), end="")
     print(f"results in {out}/")
     return 0
+
+
+def _check_folder(out: Path, what: str, overwrite: bool) -> None:
+    """``out`` holds nothing but ``what``'s own files; table1's only with ``overwrite``."""
+    from gaitnet_mpc.errors import ConfigError
+    from gaitnet_mpc.experiments.reproduce import ARTIFACTS, RESUMABLE
+    from gaitnet_mpc.results.outdir import LOCK, STATUS
+
+    names = sorted(p.name for p in out.iterdir() if p.name not in (LOCK, STATUS))
+    foreign = [n for n in names if n not in ARTIFACTS[what] and not n.endswith(".part")]
+    if foreign:
+        raise ConfigError(
+            "--out",
+            str(out),
+            f"a folder of {what} results only (it holds {', '.join(foreign[:4])})",
+        )
+    if names and what not in RESUMABLE and not overwrite:
+        raise ConfigError(
+            "--out",
+            str(out),
+            f"a new or empty folder (it holds {', '.join(names[:4])}); pass --overwrite to "
+            "replace the results in it",
+        )

@@ -212,6 +212,12 @@ def add_parser(sub: Any) -> None:
     run.add_argument("--no-plots", action="store_true", help="skip the PNGs in plots/")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument(
+        "--allow-fall",
+        action="store_true",
+        help="exit 0 when the robot falls (default: a fall exits 1; the run folder is "
+        "written either way)",
+    )
+    run.add_argument(
         "--viewer",
         action="store_true",
         help="watch the episode in MuJoCo's interactive viewer (needs a display)",
@@ -232,7 +238,9 @@ def _epilog(controllers: list[str]) -> str:
     lines.append(
         "outcome line: OK (ended upright), NOT UPRIGHT (no fall, but the end state is past\n"
         "  half the fall detector's tilt or CoM-height margin), FELL, INTERRUPTED (Ctrl-C or\n"
-        "  SIGTERM: what was simulated is saved, exit status 130)"
+        "  SIGTERM: what was simulated is saved, exit status 130)\n"
+        "exit status: 0 done, 1 the robot fell (0 with --allow-fall), 2 bad input, "
+        "130 interrupted"
     )
     return "\n".join(lines)
 
@@ -284,11 +292,11 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
 
 
 def main(args: argparse.Namespace) -> int:
-    from gaitnet_mpc.cli.viewer import check_viewer, open_viewer
-    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, prepare_output_folder
+    from gaitnet_mpc.cli.viewer import check_viewer
+    from gaitnet_mpc.results.outdir import claim_output_folder
+    from gaitnet_mpc.results.rundir import RUN_ARTIFACTS
     from gaitnet_mpc.robots import load_robot
-    from gaitnet_mpc.runner.episode import VideoConfig
-    from gaitnet_mpc.scenario import build_episode, run_scenario, scenario_warnings
+    from gaitnet_mpc.scenario import build_episode
     from gaitnet_mpc.sim.simulator import check_payload
 
     if args.viewer:
@@ -297,19 +305,35 @@ def main(args: argparse.Namespace) -> int:
     robot = load_robot(scenario.robot)
     check_payload(scenario.payload_kg, robot.total_mass_kg, "--payload-kg")
     episode = build_episode(scenario, robot=robot)  # every error before the folder is touched
-    out = prepare_output_folder(
+    with claim_output_folder(
         args.out,
         option="--out",
         default_prefix="",
         artifacts=RUN_ARTIFACTS,
         overwrite=args.overwrite,
-    )
+    ) as out:
+        return _run(args, scenario, episode, out)
+
+
+def _run(args: argparse.Namespace, scenario: Any, episode: Any, out: Path) -> int:
+    """Simulate ``episode`` into the claimed folder ``out``; plots; the outcome; the code."""
+    import shlex
+
+    from gaitnet_mpc.cli.main import EXIT_FELL, EXIT_INTERRUPTED, EXIT_OK
+    from gaitnet_mpc.cli.viewer import open_viewer
+    from gaitnet_mpc.results.outdir import write_status
+    from gaitnet_mpc.runner.episode import VideoConfig
+    from gaitnet_mpc.scenario import run_scenario, scenario_warnings
+
+    command = shlex.join(["gaitnet-mpc", *args.argv])
     extra = []
     if args.no_video and (args.camera != "oblique" or args.no_overlay):
         extra.append("--camera / --no-overlay have no effect with --no-video")
     for text in [*scenario_warnings(scenario), *extra]:
         print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     video = None if args.no_video else VideoConfig(camera=args.camera, overlay=not args.no_overlay)
+    todo = ["simulation"] + ["video"] * (video is not None) + ["plots"] * (not args.no_plots)
+    write_status(out, command=command, state="running", todo=todo)  # until it ends
     print(
         f"simulating {scenario.duration_s:g} s: {scenario.controller} on {scenario.robot}, "
         f"{scenario.course}",
@@ -361,7 +385,31 @@ def main(args: argparse.Namespace) -> int:
     print(f"wall time: {timing}")
     print(f"results in {out}/")
     print(outcome_line(summary))
-    return 130 if summary["interrupted"] or plots_interrupted else 0
+    interrupted = bool(summary["interrupted"]) or plots_interrupted
+    code = EXIT_INTERRUPTED if interrupted else EXIT_OK
+    if not interrupted and summary["fell"] and not args.allow_fall:
+        code = EXIT_FELL
+    done = [f"simulated {summary['duration_s']:g} of {scenario.duration_s:g} s"]
+    if video is not None and (out / "video.mp4").is_file():
+        done.append("video")
+    if not args.no_plots and not plots_interrupted:
+        done.append("plots")
+    left = [t for t in todo if t != "simulation" and t not in done]
+    if summary["interrupted"]:
+        left.insert(0, "the rest of the simulation")
+    note = outcome_line(summary)
+    if interrupted:  # an episode is not resumed mid-way: it is simulated again
+        note += f"; to finish, run the command again with --overwrite (or `gaitnet-mpc plot {out}`)"
+    write_status(
+        out,
+        command=command,
+        state="interrupted" if interrupted else "done",
+        exit_code=code,
+        done=done,
+        todo=left,
+        note=note,
+    )
+    return code
 
 
 def outcome_line(summary: dict[str, Any]) -> str:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-SUMMARY = "train Gait-Net on a data set (needs PyTorch: pip install 'gaitnet-mpc[train]')"
+SUMMARY = "train Gait-Net on a data set (needs PyTorch); re-run to resume"
 
 
 def add_parser(sub: Any) -> None:
@@ -16,7 +16,16 @@ def add_parser(sub: Any) -> None:
     )
     t.add_argument("--data", type=Path, required=True, help="data-set folder (collect --out)")
     t.add_argument("--features", choices=("pca", "full"), default="pca", help="default: pca")
-    t.add_argument("--out", type=Path, required=True, help="output folder (gaitnet.npz, ...)")
+    t.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="model folder (gaitnet.npz, report.json, loss.csv, loss.png, fig4.png): new or "
+        "empty; written whole when training ends",
+    )
+    t.add_argument(
+        "--overwrite", action="store_true", help="replace the model in an existing --out"
+    )
     t.add_argument("--members", type=int, default=5, help="ensemble size (default: 5)")
     t.add_argument("--epochs", type=int, default=400, help="most epochs (default: 400)")
     t.add_argument("--seed", type=int, default=0, help="training and split seed (default: 0)")
@@ -24,16 +33,22 @@ def add_parser(sub: Any) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from gaitnet_mpc.gaitnet.data import load_dataset
-    from gaitnet_mpc.gaitnet.fit import fit, write_fit
+    import shlex
+
     from gaitnet_mpc.gaitnet.train import TrainConfig
+    from gaitnet_mpc.gaitnet.training_run import train_folder
 
     config = TrainConfig(members=args.members, epochs=args.epochs, seed=args.seed)
-    data = load_dataset(args.data)
-    result, report, selection = fit(
-        data, args.features, config, split_seed=args.seed, progress=not args.no_progress
+    report = train_folder(
+        args.data,
+        args.out,
+        args.features,
+        config,
+        args.seed,
+        overwrite=args.overwrite,
+        progress=not args.no_progress,
+        command=shlex.join(["gaitnet-mpc", *args.argv]),
     )
-    write_fit(args.out, result, report, selection)
     print(
         f"features {', '.join(report.feature_names)}\n"
         f"test RMSE of dt {report.test_rmse_s:.2e} s (always the mean: "

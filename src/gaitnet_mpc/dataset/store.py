@@ -18,18 +18,17 @@ afterwards; a set killed mid-way is redone from its start (no checkpoints within
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import hashlib
 import io
 import json
-import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from gaitnet_mpc.dataset.protocol import SetSpec
 from gaitnet_mpc.dataset.schema import SCHEMA_VERSION, arrow_schema
-from gaitnet_mpc.errors import ConfigError, GaitNetMPCError
+from gaitnet_mpc.errors import GaitNetMPCError
+from gaitnet_mpc.results import outdir
 
 MANIFEST = "manifest.json"
 LOCK = ".collect.lock"
@@ -45,6 +44,9 @@ class DatasetError(GaitNetMPCError):
     def __init__(self, file: str, field: str, value: object, expected: str) -> None:
         self.file, self.field, self.value, self.expected = file, field, value, expected
         super().__init__(f"{file}: {field}: got {value!r}, expected {expected}")
+
+    def __reduce__(self) -> tuple[type, tuple[str, str, object, str]]:
+        return (type(self), (self.file, self.field, self.value, self.expected))
 
 
 def set_file(spec: SetSpec) -> str:
@@ -108,25 +110,10 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
 
 @contextlib.contextmanager
 def folder_lock(folder: Path) -> Iterator[None]:
-    """Hold the folder's lock for the block; a second holder gets a clear error at once.
-
-    An ``flock`` dies with its process, so a killed ``collect`` leaves no stale lock."""
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / LOCK
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = path.read_text().strip() or "another process"
-            raise ConfigError(
-                "--out", str(folder), f"a folder no other collect is writing (locked by {holder})"
-            ) from None
-        os.ftruncate(fd, 0)
-        os.write(fd, f"pid {os.getpid()}\n".encode())
+    """Hold the folder's lock for the block; a second ``collect`` gets a clear error at
+    once (:func:`gaitnet_mpc.results.outdir.folder_lock`, on :data:`LOCK`)."""
+    with outdir.folder_lock(folder, name=LOCK, what="collect"):
         yield
-    finally:
-        os.close(fd)
 
 
 def remove_partial_files(folder: Path) -> list[str]:

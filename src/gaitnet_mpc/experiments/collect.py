@@ -42,11 +42,12 @@ from gaitnet_mpc.dataset.store import (
     set_file,
     sha256_file,
 )
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.errors import ConfigError, GaitNetMPCError, PartialFailure
 from gaitnet_mpc.experiments.setrun import SetResult, run_set
 from gaitnet_mpc.experiments.teachers import teacher_config
 from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
 from gaitnet_mpc.results.io import write_bytes_atomic, write_json_atomic
+from gaitnet_mpc.results.outdir import check_output_path, write_status
 
 BACKENDS = ("process", "ray")
 
@@ -223,6 +224,25 @@ def _finished_sets(
     return done
 
 
+#: The log of sets whose worker raised or died (set, spec, traceback), in the folder.
+ERRORS_LOG = "errors.log"
+
+
+def check_inputs(protocol: CollectProtocol, folder: Path) -> Path:
+    """Everything a worker would find wrong, found here before any set starts: the output
+    path, the teacher's settings, and the course of every set."""
+    from gaitnet_mpc.robots import ROBOTS
+    from gaitnet_mpc.terrain import SEEDED_COURSES, load_course
+
+    folder = check_output_path(folder, "--out")
+    teacher_config(protocol, ROBOTS[protocol.robot].planar)
+    seeded = protocol.course in SEEDED_COURSES
+    seeds = sorted({s.course_seed for s in protocol.set_specs()}) if seeded else [None]
+    for seed in seeds:
+        load_course(protocol.course, **({} if seed is None else {"seed": seed}))
+    return folder
+
+
 def collect(
     protocol: CollectProtocol,
     folder: Path,
@@ -232,14 +252,19 @@ def collect(
 ) -> dict[str, Any]:
     """Collect every set of ``protocol`` not yet in ``folder``; return the manifest.
 
+    A set whose worker raises (other than a named bad-input error) or dies is logged with
+    its traceback in ``folder/errors.log`` and the other sets go on; ``status.json`` says
+    which sets are done, failed and left.
+
     Raises:
         ConfigError: bad settings, a folder of another protocol, or a folder locked by
-            another ``collect``.
+            another ``collect`` (all before any set starts), or a named error of a worker.
+        PartialFailure: after the other sets finished, when some sets failed.
         KeyboardInterrupt: on Ctrl-C / SIGTERM, after writing what was finished.
     """
-    folder = Path(folder)
     from gaitnet_mpc.robots import ROBOTS
 
+    folder = check_inputs(protocol, Path(folder))
     teacher_toml = dumps(teacher_config(protocol, ROBOTS[protocol.robot].planar))
     with folder_lock(folder):
         for name in remove_partial_files(folder):
@@ -254,14 +279,34 @@ def collect(
         entries = _finished_sets(folder, protocol, manifest, log)
         header = _manifest_header(protocol, teacher_toml, command_line)
         todo = [s for s in protocol.set_specs() if s.index not in entries]
+        failed: dict[int, str] = {}
+
+        def status(state: str, code: int | None = None) -> None:
+            names = {s.index: s.name for s in protocol.set_specs()}
+            left = [names[i] for i in sorted(names) if i not in entries and i not in failed]
+            note = "run the same command again to collect the sets left"
+            if failed:
+                note = f"sets failed: {', '.join(failed.values())} (see {ERRORS_LOG}); " + note
+            write_status(
+                folder,
+                command=command_line,
+                state=state,
+                exit_code=code,
+                done=[names[i] for i in sorted(entries)],
+                todo=[*left, *failed.values()],
+                note=note,
+            )
+
         if not todo:
             log(f"nothing to do: all {protocol.sets} sets are in {folder}")
+            status("done", 0)
             return _write_manifest(folder, header, protocol.sets, entries)
         log(
             f"collecting {len(todo)} of {protocol.sets} sets ({len(entries)} already in "
             f"{folder}), {protocol.seconds_per_set:g} s each, teacher {protocol.teacher}, "
             f"{options.workers} worker(s), backend {options.backend}"
         )
+        status("running")
         bar = _progress_bar(len(todo) * protocol.seconds_per_set) if options.progress else None
         t0 = time.perf_counter()
 
@@ -270,21 +315,34 @@ def collect(
                 bar.update(sim_s)
 
         runs = _runs(todo, options, on_progress if bar is not None else None)
+        manifest = None
         try:
             with closing(runs), stop_signals_as_keyboard_interrupt():
                 for outcome in runs:
                     spec = outcome.item
-                    data, stats, wall_s = outcome.get()  # a set's error stops the run
+                    if outcome.error is not None:
+                        if isinstance(outcome.error, GaitNetMPCError):
+                            raise outcome.error  # bad input the checks above did not see
+                        failed[spec.index] = spec.name
+                        _log_failure(folder / ERRORS_LOG, spec, outcome)
+                        status("running")
+                        line = f"{spec.name}: FAILED ({type(outcome.error).__name__}: "
+                        line += f"{str(outcome.error)[:200]}); see {folder / ERRORS_LOG}"
+                        (bar.write if bar is not None else log)(line)
+                        continue
+                    data, stats, wall_s = outcome.get()
                     path = folder / set_file(spec)
                     write_bytes_atomic(path, data)
                     entries[spec.index] = _entry(spec, path, stats, wall_s)
                     manifest = _write_manifest(folder, header, protocol.sets, entries)
+                    status("running")
                     if bar is not None and options.backend == "ray":
                         bar.update(protocol.seconds_per_set)
                     line = _set_line(spec, stats, wall_s, len(entries), protocol.sets)
                     (bar.write if bar is not None else log)(line)
         except KeyboardInterrupt:
             left = protocol.sets - len(entries)
+            status("interrupted", 130)
             log(
                 f"interrupted: {len(entries)} of {protocol.sets} sets are in {folder}, {left} "
                 "left; run the same command again to collect them"
@@ -293,9 +351,32 @@ def collect(
         finally:
             if bar is not None:
                 bar.close()
-        assert manifest is not None
-        log(f"collected {len(todo)} sets in {time.perf_counter() - t0:.0f} s into {folder}")
+        if manifest is None:
+            manifest = _write_manifest(folder, header, protocol.sets, entries)
+        wall_s = time.perf_counter() - t0
+        log(f"collected {len(todo) - len(failed)} sets in {wall_s:.0f} s into {folder}")
+        if failed:
+            status("failed", 3)
+            raise PartialFailure("collect", list(failed.values()), str(folder / ERRORS_LOG))
+        status("done", 0)
         return manifest
+
+
+def _log_failure(path: Path, spec: SetSpec, outcome: Outcome[SetSpec, SetBytes]) -> None:
+    """Append a failed set, its spec and its traceback (the worker's, where it raised)."""
+    import traceback
+
+    assert outcome.error is not None
+    what = "its worker died" if outcome.worker_died else "its worker raised"
+    text = "".join(traceback.format_exception(outcome.error))
+    entry = (
+        f"=== {time.strftime('%Y-%m-%dT%H:%M:%S')} {spec.name}: {what}\n"
+        f"spec: {json.dumps(spec.to_dict())}\n{text}\n"
+    )
+    with path.open("a") as fh:
+        fh.write(entry)
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def _set_line(spec: SetSpec, stats: dict[str, Any], wall_s: float, n: int, total: int) -> str:

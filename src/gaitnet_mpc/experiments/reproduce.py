@@ -20,6 +20,12 @@ def table1(data_dir: Path, out: Path) -> Path:
     return out / "table1.md"
 
 
+def check_problems(problems: int) -> None:
+    """``--problems`` of table2: an integer in [1, :data:`MAX_PROBLEMS`]."""
+    if not (isinstance(problems, int) and 1 <= problems <= MAX_PROBLEMS):
+        raise ConfigError("--problems", problems, f"an integer in [1, {MAX_PROBLEMS}]")
+
+
 def table2(
     out: Path,
     problems: int,
@@ -30,10 +36,20 @@ def table2(
     """Table II: the solvers on the same recorded MPC problems (``problems`` of them)."""
     from gaitnet_mpc.table2.run import reproduce_table2
 
-    if problems < 1:
-        raise ConfigError("--problems", problems, "an integer >= 1")
+    check_problems(problems)
     return reproduce_table2(out, problems, progress=progress, with_joint_space=with_joint_space)
 
+
+#: The files each one writes into its folder (what ``--overwrite`` may replace; a table2
+#: folder with its own files is resumed, not refused).
+ARTIFACTS: dict[str, tuple[str, ...]] = {
+    "table1": ("table1.md", "table1.csv", "fig4.png", "full", "pca"),
+    "table2": ("problems.npz", "problems.tmp.npz", "records.jsonl", "table2.md", "table2.md.tmp"),
+}
+#: The ones that resume from what an earlier, interrupted run left in the folder.
+RESUMABLE = frozenset({"table2"})
+#: Most recorded problems of table2 (the paper's table is over 100; each is ~1 s to record).
+MAX_PROBLEMS = 10_000
 
 #: What ``gaitnet-mpc reproduce`` knows, with a line each for ``--help``.
 REPRODUCIBLE = {

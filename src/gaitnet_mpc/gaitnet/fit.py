@@ -9,6 +9,7 @@ the features add), overall and on the pushed steps.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.data import GaitData, SetSplit, split_by_set
 from gaitnet_mpc.gaitnet.features import PCASelection, pca_select
 from gaitnet_mpc.gaitnet.model import GaitNet
-from gaitnet_mpc.gaitnet.train import TrainConfig, TrainResult, train_ensemble
+from gaitnet_mpc.gaitnet.train import MemberFit, TrainConfig, TrainResult, train_ensemble
 
 FEATURE_SETS = ("pca", "full")
 
@@ -63,8 +64,13 @@ def fit(
     config: TrainConfig | None = None,
     split_seed: int = 0,
     progress: bool = True,
+    done: Mapping[int, MemberFit] | None = None,
+    on_member: Callable[[int, MemberFit], None] | None = None,
 ) -> tuple[TrainResult, FitReport, PCASelection | None]:
-    """Train on ``data`` with the ``kind`` feature set; evaluate on the held-out sets."""
+    """Train on ``data`` with the ``kind`` feature set; evaluate on the held-out sets.
+
+    ``done`` and ``on_member`` resume a training member by member (see
+    :func:`~gaitnet_mpc.gaitnet.train.train_ensemble`)."""
     cfg = config or TrainConfig()
     split = split_by_set(data.set_id, seed=split_seed)
     part = {name: np.isin(data.set_id, getattr(split, name)) for name in ("train", "val", "test")}
@@ -83,6 +89,8 @@ def fit(
         data.dt_range_s,
         cfg,
         progress=update,
+        done=done,
+        on_member=on_member,
         provenance={
             "data_manifest_sha256": data.manifest_sha256,
             "robot": data.robot,

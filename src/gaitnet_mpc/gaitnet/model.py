@@ -25,9 +25,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.dataset.schema import FEATURE_NAMES
 from gaitnet_mpc.errors import ConfigError
 
 FORMAT_VERSION = 1
@@ -56,10 +58,32 @@ class GaitNetWeights:
             raise ConfigError("activation", self.activation, f"one of {list(ACTIVATIONS)}")
         if len(self.weights) != len(self.biases) or not self.weights:
             raise ConfigError("layers", len(self.weights), "as many weight as bias arrays (>0)")
-        if self.weights[0].shape[2] != len(self.feature_names):
+        unknown = [n for n in self.feature_names if n not in FEATURE_NAMES]
+        if not self.feature_names or unknown:
+            raise ConfigError("feature_names", unknown or [], f"names among {FEATURE_NAMES}")
+        n_in = len(self.feature_names)
+        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
+            if w.ndim != 3 or b.ndim != 2 or b.shape != w.shape[:2] or w.shape[2] != n_in:
+                raise ConfigError(
+                    f"layer{i}_w / layer{i}_b",
+                    (w.shape, b.shape),
+                    f"(K, out, {n_in}) and (K, out), K and out the same in both",
+                )
+            n_in = w.shape[1]
+        if n_in != 1 or len({w.shape[0] for w in self.weights}) != 1:
             raise ConfigError(
-                "layer0_w", self.weights[0].shape, f"(K, h, {len(self.feature_names)})"
+                "layers", [w.shape for w in self.weights], "K members ending in 1 output"
             )
+        if self.x_mean.shape != (len(self.feature_names),) or self.x_std.shape != self.x_mean.shape:
+            raise ConfigError("x_mean / x_std", (self.x_mean.shape, self.x_std.shape), "(f,) each")
+        arrays = (*self.weights, *self.biases, self.x_mean, self.x_std)
+        if not all(np.all(np.isfinite(a)) for a in arrays) or not np.all(self.x_std > 0):
+            raise ConfigError("weights", "non-finite values", "finite weights and x_std > 0")
+        if not (math.isfinite(self.y_mean) and math.isfinite(self.y_std) and self.y_std > 0):
+            raise ConfigError("y_mean / y_std", (self.y_mean, self.y_std), "finite, y_std > 0")
+        lo, hi = self.dt_clip_s
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
+            raise ConfigError("dt_clip_s", self.dt_clip_s, "0 < lo < hi [s]")
 
     @property
     def members(self) -> int:
@@ -92,29 +116,49 @@ class GaitNetWeights:
 
     @classmethod
     def load(cls, path: str | Path) -> GaitNetWeights:
+        """Read a weights file; a :class:`ConfigError` names the file and what is wrong
+        (not a ``.npz``, a missing entry, inconsistent shapes, non-finite values)."""
+        import zipfile
+
         path = Path(path)
         if not path.is_file():
             raise ConfigError("Gait-Net weights", str(path), "an existing .npz file")
-        with np.load(path, allow_pickle=False) as f:
-            if int(f["format_version"]) != FORMAT_VERSION:
-                raise ConfigError(
-                    f"{path.name}: format_version", int(f["format_version"]), str(FORMAT_VERSION)
-                )
-            n = sum(1 for k in f.files if k.endswith("_w"))
-            return cls(
-                weights=tuple(np.asarray(f[f"layer{i}_w"], dtype=float) for i in range(n)),
-                biases=tuple(np.asarray(f[f"layer{i}_b"], dtype=float) for i in range(n)),
-                feature_names=tuple(str(s) for s in f["feature_names"]),
-                x_mean=np.asarray(f["x_mean"], dtype=float),
-                x_std=np.asarray(f["x_std"], dtype=float),
-                y_mean=float(f["y_mean"]),
-                y_std=float(f["y_std"]),
-                dt_clip_s=(float(f["dt_clip_s"][0]), float(f["dt_clip_s"][1])),
-                activation=str(f["activation"]),
-                data_manifest_sha256=str(f["data_manifest_sha256"]),
-                robot=str(f["robot"]),
-                teacher=str(f["teacher"]),
-            )
+        try:
+            f = np.load(path, allow_pickle=False)
+            if not isinstance(f, np.lib.npyio.NpzFile):
+                raise ConfigError("Gait-Net weights", str(path), "an .npz archive, not one array")
+            with f:
+                return cls._from_arrays(f)
+        except ConfigError as exc:
+            if exc.field == "Gait-Net weights":
+                raise
+            raise ConfigError(f"{path}: {exc.field}", exc.value, exc.expected) from None
+        except KeyError as exc:
+            missing = str(exc.args[0] if exc.args else exc)
+            raise ConfigError(str(path), missing, "a Gait-Net weights file") from None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            expected = f"a Gait-Net weights .npz (gaitnet-mpc train) ({type(exc).__name__}: {exc})"
+            raise ConfigError("Gait-Net weights", str(path), expected) from None
+
+    @classmethod
+    def _from_arrays(cls, f: Any) -> GaitNetWeights:
+        if int(f["format_version"]) != FORMAT_VERSION:
+            raise ConfigError("format_version", int(f["format_version"]), str(FORMAT_VERSION))
+        n = sum(1 for k in f.files if k.endswith("_w"))
+        return cls(
+            weights=tuple(np.asarray(f[f"layer{i}_w"], dtype=float) for i in range(n)),
+            biases=tuple(np.asarray(f[f"layer{i}_b"], dtype=float) for i in range(n)),
+            feature_names=tuple(str(s) for s in np.atleast_1d(f["feature_names"])),
+            x_mean=np.atleast_1d(np.asarray(f["x_mean"], dtype=float)),
+            x_std=np.atleast_1d(np.asarray(f["x_std"], dtype=float)),
+            y_mean=float(f["y_mean"]),
+            y_std=float(f["y_std"]),
+            dt_clip_s=(float(f["dt_clip_s"][0]), float(f["dt_clip_s"][1])),
+            activation=str(f["activation"]),
+            data_manifest_sha256=str(f["data_manifest_sha256"]),
+            robot=str(f["robot"]),
+            teacher=str(f["teacher"]),
+        )
 
 
 class GaitNet:

@@ -13,14 +13,20 @@ PyTorch is needed only here (``pip install 'gaitnet-mpc[train]'``); the controll
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.model import GaitNetWeights
+
+#: Most ensemble members (the paper's ensemble is 5; 100 is a training of hours).
+MAX_MEMBERS = 100
+#: Most epochs per member (early stopping ends members within a few hundred).
+MAX_EPOCHS = 100_000
 
 
 @dataclass(frozen=True)
@@ -50,9 +56,15 @@ class TrainConfig:
     def __post_init__(self) -> None:
         if not self.hidden or any(int(h) < 1 for h in self.hidden):
             raise ConfigError("hidden", self.hidden, "one or more layer sizes >= 1")
-        for name in ("members", "epochs", "patience", "batch_size"):
-            if int(getattr(self, name)) < 1:
-                raise ConfigError(name, getattr(self, name), "an integer >= 1")
+        for name, most in (
+            ("members", MAX_MEMBERS),
+            ("epochs", MAX_EPOCHS),
+            ("patience", MAX_EPOCHS),
+            ("batch_size", 1 << 20),
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and 1 <= value <= most):
+                raise ConfigError(f"--{name}", value, f"an integer in [1, {most}]")
         if not (math.isfinite(self.learning_rate) and self.learning_rate > 0):
             raise ConfigError("learning_rate", self.learning_rate, "a value > 0")
 
@@ -77,6 +89,48 @@ def _import_torch():  # type: ignore[no-untyped-def]
     return torch
 
 
+@dataclass(frozen=True)
+class MemberFit:
+    """One trained member: its layers (best validation epoch) and loss curves.
+
+    Members are independent (each from its own seed), so a training interrupted after some
+    members resumes from them and gives the same ensemble as one that was not.
+    """
+
+    weights: tuple[np.ndarray, ...]  # (out, in) per layer
+    biases: tuple[np.ndarray, ...]  # (out,) per layer
+    train_loss: tuple[float, ...]
+    val_loss: tuple[float, ...]
+    best_epoch: int
+
+    def save(self, path: str | Path) -> None:
+        """Write the member as a ``.npz`` (exact float64), atomically."""
+        import io
+
+        from gaitnet_mpc.results.io import write_bytes_atomic
+
+        arrays: dict[str, Any] = {f"w{i}": w for i, w in enumerate(self.weights)}
+        arrays |= {f"b{i}": b for i, b in enumerate(self.biases)}
+        arrays["train_loss"] = np.array(self.train_loss, dtype=float)
+        arrays["val_loss"] = np.array(self.val_loss, dtype=float)
+        arrays["best_epoch"] = np.array(self.best_epoch)
+        buf = io.BytesIO()
+        np.savez(buf, **arrays)
+        write_bytes_atomic(path, buf.getvalue())
+
+    @classmethod
+    def load(cls, path: str | Path) -> MemberFit:
+        with np.load(path, allow_pickle=False) as f:
+            n = sum(1 for k in f.files if k.startswith("w"))
+            return cls(
+                weights=tuple(np.asarray(f[f"w{i}"], dtype=float) for i in range(n)),
+                biases=tuple(np.asarray(f[f"b{i}"], dtype=float) for i in range(n)),
+                train_loss=tuple(float(v) for v in f["train_loss"]),
+                val_loss=tuple(float(v) for v in f["val_loss"]),
+                best_epoch=int(f["best_epoch"]),
+            )
+
+
 def train_ensemble(
     x_train: np.ndarray,
     y_train: np.ndarray,
@@ -87,9 +141,14 @@ def train_ensemble(
     config: TrainConfig | None = None,
     progress: Callable[[int, int], None] | None = None,
     provenance: dict[str, str] | None = None,
+    done: Mapping[int, MemberFit] | None = None,
+    on_member: Callable[[int, MemberFit], None] | None = None,
 ) -> TrainResult:
     """Train ``config.members`` nets on (x_train, y_train [s]); early-stop on the
-    validation rows. ``progress(member, epoch)`` is called after every epoch."""
+    validation rows. ``progress(member, epoch)`` is called after every epoch.
+
+    ``done`` holds members trained before (a resumed training): they are taken as they
+    are. ``on_member(member, fit)`` is called after each member is trained (to keep it)."""
     torch = _import_torch()
     cfg = config or TrainConfig()
     if len(x_train) < 2 or len(x_val) < 1:
@@ -104,61 +163,25 @@ def train_ensemble(
     yv = torch.tensor((y_val - y_mean) / y_std, dtype=torch.float64)[:, None]
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
-    result = TrainResult(weights=None)  # type: ignore[arg-type]
-    layers_w: list[list[np.ndarray]] = []
-    layers_b: list[list[np.ndarray]] = []
+    fits: list[MemberFit] = []
     try:
         torch.use_deterministic_algorithms(True)
         for member in range(cfg.members):
-            torch.manual_seed(cfg.seed + member)
-            net = _mlp(torch, [x_train.shape[1], *cfg.hidden, 1])
-            opt = torch.optim.AdamW(
-                net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay
-            )
-            gen = torch.Generator().manual_seed(cfg.seed + member)
-            best, best_state, best_epoch, curve_t, curve_v = math.inf, None, 0, [], []
-            for epoch in range(cfg.epochs):
-                net.train()
-                order = torch.randperm(len(xt), generator=gen)
-                total = 0.0
-                for start in range(0, len(xt), cfg.batch_size):
-                    idx = order[start : start + cfg.batch_size]
-                    opt.zero_grad()
-                    loss = torch.mean((net(xt[idx]) - yt[idx]) ** 2)
-                    loss.backward()
-                    opt.step()
-                    total += loss.item() * len(idx)
-                net.eval()
-                with torch.no_grad():
-                    val = float(torch.mean((net(xv) - yv) ** 2))
-                curve_t.append(total / len(xt))
-                curve_v.append(val)
-                if val < best - 1e-9:
-                    best, best_epoch = val, epoch
-                    best_state = {k: v.clone() for k, v in net.state_dict().items()}
-                if progress is not None:
-                    progress(member, epoch)
-                if epoch - best_epoch >= cfg.patience:
-                    break
-            assert best_state is not None
-            net.load_state_dict(best_state)
-            linears = [m for m in net if isinstance(m, torch.nn.Linear)]
-            for i, lin in enumerate(linears):
-                if member == 0:
-                    layers_w.append([])
-                    layers_b.append([])
-                layers_w[i].append(lin.weight.detach().numpy().copy())
-                layers_b[i].append(lin.bias.detach().numpy().copy())
-            result.train_loss.append(curve_t)
-            result.val_loss.append(curve_v)
-            result.best_epoch.append(best_epoch)
+            if done is not None and member in done:
+                fits.append(done[member])
+                continue
+            fit = _train_member(torch, member, cfg, (xt, yt, xv, yv), progress)
+            fits.append(fit)
+            if on_member is not None:
+                on_member(member, fit)
     finally:
         torch.set_num_threads(threads)
         torch.use_deterministic_algorithms(False)
     info = provenance or {}
-    result.weights = GaitNetWeights(
-        weights=tuple(np.stack(w) for w in layers_w),
-        biases=tuple(np.stack(b) for b in layers_b),
+    n_layers = len(fits[0].weights)
+    weights = GaitNetWeights(
+        weights=tuple(np.stack([f.weights[i] for f in fits]) for i in range(n_layers)),
+        biases=tuple(np.stack([f.biases[i] for f in fits]) for i in range(n_layers)),
         feature_names=tuple(feature_names),
         x_mean=x_mean,
         x_std=x_std,
@@ -170,7 +193,64 @@ def train_ensemble(
         robot=info.get("robot", ""),
         teacher=info.get("teacher", ""),
     )
-    return result
+    return TrainResult(
+        weights=weights,
+        train_loss=[list(f.train_loss) for f in fits],
+        val_loss=[list(f.val_loss) for f in fits],
+        best_epoch=[f.best_epoch for f in fits],
+    )
+
+
+def _train_member(
+    torch: Any,
+    member: int,
+    cfg: TrainConfig,
+    tensors: tuple[Any, Any, Any, Any],
+    progress: Callable[[int, int], None] | None,
+) -> MemberFit:
+    """Member ``member`` trained from seed ``cfg.seed + member`` alone (nothing of the
+    other members), early-stopped on the validation loss."""
+    xt, yt, xv, yv = tensors
+    torch.manual_seed(cfg.seed + member)
+    net = _mlp(torch, [xt.shape[1], *cfg.hidden, 1])
+    opt = torch.optim.AdamW(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
+    gen = torch.Generator().manual_seed(cfg.seed + member)
+    best, best_state, best_epoch = math.inf, None, 0
+    curve_t: list[float] = []
+    curve_v: list[float] = []
+    for epoch in range(cfg.epochs):
+        net.train()
+        order = torch.randperm(len(xt), generator=gen)
+        total = 0.0
+        for start in range(0, len(xt), cfg.batch_size):
+            idx = order[start : start + cfg.batch_size]
+            opt.zero_grad()
+            loss = torch.mean((net(xt[idx]) - yt[idx]) ** 2)
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        net.eval()
+        with torch.no_grad():
+            val = float(torch.mean((net(xv) - yv) ** 2))
+        curve_t.append(total / len(xt))
+        curve_v.append(val)
+        if val < best - 1e-9:
+            best, best_epoch = val, epoch
+            best_state = {k: v.clone() for k, v in net.state_dict().items()}
+        if progress is not None:
+            progress(member, epoch)
+        if epoch - best_epoch >= cfg.patience:
+            break
+    assert best_state is not None
+    net.load_state_dict(best_state)
+    linears = [m for m in net if isinstance(m, torch.nn.Linear)]
+    return MemberFit(
+        weights=tuple(lin.weight.detach().numpy().copy() for lin in linears),
+        biases=tuple(lin.bias.detach().numpy().copy() for lin in linears),
+        train_loss=tuple(curve_t),
+        val_loss=tuple(curve_v),
+        best_epoch=best_epoch,
+    )
 
 
 def _mlp(torch: Any, sizes: list[int]) -> Any:

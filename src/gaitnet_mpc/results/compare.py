@@ -161,14 +161,15 @@ def plot_compare(runs: Sequence[RunFolder], labels: Sequence[str], path: Path) -
             k = int(np.clip(np.searchsorted(ta, t_fall), 0, ta.size - 1))
             ax_v.scatter([t_fall], [va[k]], marker="x", s=120, color=c, linewidths=2.5, zorder=4)
         steps = np.asarray(run.summary.get("step_durations_s") or [], dtype=float)
-        if steps.size:
+        if steps.size:  # the last step was in progress at the end: a hollow marker
             ax_s.plot(np.arange(steps.size), steps, color=c, marker="o", ms=3, lw=1.0)
+            ax_s.plot([steps.size - 1], steps[-1:], ls="", marker="o", ms=6, mfc="white", color=c)
     ax_v.set_title("forward velocity (0.25 s mean; dashed: command; X: fall)", fontsize=9)
     ax_v.set_xlabel("time [s]")
     ax_v.set_ylabel("$v_x$ [m/s]")
     ax_v.grid(alpha=0.3)
     ax_v.legend(loc="best", fontsize=8)
-    ax_s.set_title("step durations", fontsize=9)
+    ax_s.set_title("step durations (hollow: unfinished at the end)", fontsize=9)
     ax_s.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax_s.set_xlabel("step index")
     ax_s.set_ylabel("duration [s]")
@@ -238,23 +239,54 @@ def _mean_speed_mps(run: RunFolder) -> float:
     return float(s.get("distance_m") or 0.0) / duration if duration > 0 else 0.0
 
 
-def compare_runs(run_dirs: Sequence[str | Path], out_dir: str | Path) -> dict[str, Path]:
+def compare_warnings(runs: Sequence[RunFolder], labels: Sequence[str]) -> list[str]:
+    """What makes the runs not like for like: different robots or courses."""
+    out = []
+    for key, what in (("robot", "robots"), ("course", "courses")):
+        values = {
+            label: _course_name(run) if key == "course" else run.summary.get(key)
+            for run, label in zip(runs, labels, strict=True)
+        }
+        if len(set(values.values())) > 1:
+            listed = ", ".join(f"{label}: {value}" for label, value in values.items())
+            out.append(f"the runs are of different {what} ({listed})")
+    return out
+
+
+def _course_name(run: RunFolder) -> str:
+    """The course and its layout seed (a seeded layout is another course)."""
+    name = str(run.summary.get("course"))
+    seed = run.summary.get("seed")
+    return name if seed is None else f"{name} (seed {seed})"
+
+
+def compare_runs(runs: Sequence[RunFolder | str | Path], out_dir: str | Path) -> dict[str, Any]:
     """Write ``compare.png``, ``compare.md`` and ``compare.csv`` into ``out_dir``.
 
-    Returns the paths written, keyed by ``"figure"``, ``"markdown"`` and ``"csv"``.
-    Raises :class:`ConfigError` for fewer than one run or a folder that is not a run.
+    ``runs`` are run folders, loaded or as paths. Returns the paths written, keyed by
+    ``"figure"``, ``"markdown"`` and ``"csv"``, and the :func:`compare_warnings` under
+    ``"warnings"`` (also written into ``compare.md``). Raises :class:`ConfigError` for
+    fewer than one run or a folder that is not a run.
     """
-    if not run_dirs:
+    if not runs:
         raise ConfigError("RUN_DIR", [], "at least one run folder")
-    runs = [load_run(p) for p in run_dirs]
-    labels = _labels(runs)
-    rows = [table_row(run, label) for run, label in zip(runs, labels, strict=True)]
+    loaded = [r if isinstance(r, RunFolder) else load_run(r) for r in runs]
+    labels = _labels(loaded)
+    warnings = compare_warnings(loaded, labels)
+    rows = [table_row(run, label) for run, label in zip(loaded, labels, strict=True)]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "compare.csv", table_csv(rows))
     sources = "\n".join(
-        f"* `{label}`: `{run.path}`" for run, label in zip(runs, labels, strict=True)
+        f"* `{label}`: `{run.path}`" for run, label in zip(loaded, labels, strict=True)
     )
-    write_atomic(out / "compare.md", f"# Run comparison\n\n{table_markdown(rows)}\n{sources}\n")
-    figure = plot_compare(runs, labels, out / "compare.png")
-    return {"figure": figure, "markdown": out / "compare.md", "csv": out / "compare.csv"}
+    notes = "".join(f"**Warning:** {w}.\n\n" for w in warnings)
+    text = f"# Run comparison\n\n{notes}{table_markdown(rows)}\n{sources}\n"
+    write_atomic(out / "compare.md", text)
+    figure = plot_compare(loaded, labels, out / "compare.png")
+    return {
+        "figure": figure,
+        "markdown": out / "compare.md",
+        "csv": out / "compare.csv",
+        "warnings": warnings,
+    }

@@ -10,7 +10,8 @@
   hole are marked with a black X and their time in bold (Fig. 7). The same violation
   times are marked on every time axis (red dotted lines, :func:`_mark_violations`), so a
   violation seen on the map can be found on the time plots.
-* ``steps.png``: duration of each step, MPC sampling time over time and, for MPC
+* ``steps.png``: duration of each step (the last one, in progress when the episode
+  ended, hatched with its planned duration), MPC sampling time over time and, for MPC
   controllers, the solve time of every solve (Fig. 6d / Fig. 9) against the real-time
   budget: the MPC period, the median time between successive solves (a solve that takes
   longer than that could not run in real time).
@@ -269,7 +270,20 @@ def plot_steps(run: RunFolder, path: Path) -> Path:
     steps = np.asarray(run.summary.get("step_durations_s") or [], dtype=float)
     ax = axes[0]
     if steps.size:
-        ax.bar(np.arange(steps.size), steps, color="tab:purple", alpha=0.8, width=0.8)
+        # a step is recorded when it starts, with its planned duration: the last one was
+        # still in progress when the episode ended (or fell), so it is drawn apart
+        done = steps[:-1]
+        ax.bar(np.arange(done.size), done, color="tab:purple", alpha=0.8, width=0.8)
+        ax.bar(
+            [steps.size - 1],
+            steps[-1:],
+            color="none",
+            edgecolor="tab:purple",
+            hatch="//",
+            width=0.8,
+            label="unfinished at the end (planned duration)",
+        )
+        ax.legend(loc="lower right", fontsize=8)
         ax.set_ylim(0.0, 1.15 * float(steps.max()))
     else:
         _note(ax, "no steps (the controller does not step)")

@@ -82,6 +82,58 @@ def read_csv_columns(path: str | Path) -> dict[str, np.ndarray]:
     return {n: data[:, i] for i, n in enumerate(names)}
 
 
+#: The type of each ``summary.json`` field the plots and comparisons read: a number
+#: (int or float, not bool), a bool, a string, a list, a table, "number?" (a number or
+#: null), "numbers" (a list of numbers).
+SUMMARY_TYPES: dict[str, str] = {
+    "robot": "string",
+    "controller": "string",
+    "course": "string",
+    "outcome": "string",
+    "duration_s": "number",
+    "distance_m": "number",
+    "mean_speed_mps": "number?",
+    "speed_rmse_mps": "number?",
+    "foothold_violations": "number",
+    "self_collisions": "number",
+    "fall_time_s": "number?",
+    "fell": "bool",
+    "interrupted": "bool",
+    "step_durations_s": "numbers",
+    "footholds": "list",
+    "mpc": "table?",
+    "controller_options": "table?",
+}
+#: Columns ``log.csv`` must have for the plots and comparisons.
+LOG_COLUMNS_REQUIRED = ("t_s", "com_vx_mps")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def check_summary(summary: dict[str, Any], path: Path) -> None:
+    """Refuse a ``summary.json`` whose known fields have the wrong type (a hand-edited or
+    corrupted file), naming the file, the field and the expected type."""
+    checks = {
+        "string": (lambda v: isinstance(v, str), "a string"),
+        "number": (_is_number, "a number"),
+        "number?": (lambda v: v is None or _is_number(v), "a number or null"),
+        "bool": (lambda v: isinstance(v, bool), "true or false"),
+        "list": (lambda v: isinstance(v, list), "a list"),
+        "numbers": (
+            lambda v: isinstance(v, list) and all(_is_number(x) for x in v),
+            "a list of numbers",
+        ),
+        "table?": (lambda v: v is None or isinstance(v, dict), "a JSON object or null"),
+    }
+    for key, kind in SUMMARY_TYPES.items():
+        if key in summary:
+            ok, expected = checks[kind]
+            if not ok(summary[key]):
+                raise ConfigError(f"{path}: {key}", summary[key], expected)
+
+
 @dataclass(frozen=True)
 class RunFolder:
     """The files of one run folder, loaded.
@@ -129,6 +181,7 @@ def load_run(path: str | Path) -> RunFolder:
         raise ConfigError(str(root / SUMMARY), "invalid JSON", f"valid JSON ({exc})") from exc
     if not isinstance(summary, dict):
         raise ConfigError(str(root / SUMMARY), type(summary).__name__, "a JSON object")
+    check_summary(summary, root / SUMMARY)
     if (root / TIMING).is_file():
         try:
             timing = json.loads((root / TIMING).read_text())
@@ -137,6 +190,11 @@ def load_run(path: str | Path) -> RunFolder:
         if isinstance(timing, dict):
             summary = merge_timing(summary, timing)
     log = read_csv_columns(root / LOG)
+    missing = [c for c in LOG_COLUMNS_REQUIRED if c not in log]
+    if missing:
+        raise ConfigError(
+            str(root / LOG), f"no column {missing[0]}", f"columns {LOG_COLUMNS_REQUIRED}"
+        )
     mpc_log = read_csv_columns(root / MPC_LOG) if (root / MPC_LOG).is_file() else None
     course = None
     if (root / COURSE).is_file():
@@ -175,74 +233,8 @@ RUN_ARTIFACTS = (
     CONFIG,
     VIDEO,
     "video.part.mp4",
+    "status.json",
     PLOTS_DIR,
 )
 #: Files ``compare`` writes into its output folder.
 COMPARE_ARTIFACTS = ("compare.png", "compare.md", "compare.csv")
-
-
-def prepare_output_folder(
-    path: str | Path | None,
-    *,
-    option: str,
-    default_prefix: str,
-    artifacts: tuple[str, ...],
-    overwrite: bool = False,
-) -> Path:
-    """Validate and create an output folder before any long work starts.
-
-    ``path`` None: a new folder ``runs/<default_prefix><date-time>-<6 hex digits>`` (unique
-    even for runs started in the same second). Otherwise the folder must be new, empty, or,
-    with ``overwrite``, hold only earlier ``artifacts`` (which are then removed, so it ends
-    up holding only the new results). It is created and checked to be writable.
-
-    Raises:
-        ConfigError: naming ``option``, the path and what was expected.
-    """
-    import shutil
-    import time
-    import uuid
-
-    if path is None:
-        stamp = time.strftime("%Y%m%d-%H%M%S")
-        path = Path("runs") / f"{default_prefix}{stamp}-{uuid.uuid4().hex[:6]}"
-    elif str(path).strip() in ("", "."):  # checked on the string: Path("") is "."
-        raise ConfigError(option, str(path), "a folder path for the results (not empty, not '.')")
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise ConfigError(option, str(path), "a folder (this path is a file)")
-    for parent in path.parents:
-        if parent.exists() and not parent.is_dir():
-            raise ConfigError(option, str(path), f"a folder path ({parent} is a file)")
-    if path.is_dir() and any(path.iterdir()):
-        names = sorted(p.name for p in path.iterdir())
-        if not overwrite:
-            raise ConfigError(
-                option,
-                str(path),
-                f"a new or empty folder (it holds {', '.join(names[:4])}"
-                f"{', ...' if len(names) > 4 else ''}); pass --overwrite to replace "
-                "the results in it",
-            )
-        ours = [n for n in names if n in artifacts or (n.startswith(".") and n.endswith(".part"))]
-        foreign = [n for n in names if n not in ours]
-        if foreign:
-            raise ConfigError(
-                option,
-                str(path),
-                f"a folder holding only earlier results to overwrite (it also holds "
-                f"{', '.join(foreign[:4])})",
-            )
-        for name in ours:  # earlier results and leftover temporary files of atomic writes
-            target = path / name
-            if target.is_dir():
-                shutil.rmtree(target)
-            else:
-                target.unlink()
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = tempfile.NamedTemporaryFile(dir=path, prefix=".write-test-", delete=True)
-        probe.close()
-    except OSError as exc:
-        raise ConfigError(option, str(path), f"a writable folder ({exc.strerror})") from None
-    return path
