@@ -267,6 +267,7 @@ def test_a_folder_with_a_run_is_refused_unless_overwrite(tmp_path: Path, capsys)
         "events.csv",
         "log.csv",
         "scenario.toml",
+        "status.json",
         "summary.json",
         "timing.json",
     ]

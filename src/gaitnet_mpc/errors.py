@@ -6,6 +6,24 @@ expected, so a user can fix a command line or a course file without reading code
 
 from __future__ import annotations
 
+import reprlib
+
+#: How a received value is shown in a message: a huge list or string from a file is cut
+#: (``...``), so that the message stays one readable line.
+_REPR = reprlib.Repr()  # Python 3.11 takes no keyword arguments
+_REPR.maxlevel = 4
+_REPR.maxtuple = _REPR.maxlist = _REPR.maxarray = _REPR.maxdict = 12
+_REPR.maxset = _REPR.maxfrozenset = _REPR.maxdeque = 12
+_REPR.maxstring = _REPR.maxother = 160
+_REPR.maxlong = 60
+
+
+def _short_repr(value: object) -> str:
+    try:
+        return _REPR.repr(value)
+    except (ValueError, RecursionError):  # an int past Python's digit limit, a deep cycle
+        return f"<a {type(value).__name__} too large to show>"
+
 
 class GaitNetMPCError(Exception):
     """Base class of every error this package raises on purpose."""
@@ -21,7 +39,7 @@ class ConfigError(GaitNetMPCError, ValueError):
         self.field = field
         self.value = value
         self.expected = expected
-        super().__init__(f"{field}: got {value!r}, expected {expected}")
+        super().__init__(f"{field}: got {_short_repr(value)}, expected {expected}")
 
     def __reduce__(self) -> tuple[type, tuple[str, object, str]]:
         # picklable with its own constructor's arguments, so that an error raised in a
