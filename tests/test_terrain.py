@@ -310,17 +310,21 @@ def test_uneven() -> None:
 # ------------------------------------------------------------------------- queries
 
 
-def test_patch_at_and_heights_overlap_prefers_highest() -> None:
-    low = Patch(-1.0, 1.0, -1.0, 1.0, 0.0)
+def test_patch_at_and_heights_shared_edge_prefers_highest() -> None:
+    low = Patch(-1.0, 0.5, -1.0, 1.0, 0.0)
     high = Patch(0.5, 0.8, -0.2, 0.2, 0.1, "left")
     c = Course("o", (low, high))
     assert c.patch_at(0.0, 0.0) == 0
     assert c.patch_at(0.6, 0.0) == 1
     assert c.ground_height_at(0.6, 0.0) == 0.1
     assert c.patch_at(1.5, 0.0) is None and c.ground_height_at(1.5, 0.0) is None
-    assert c.patch_at(1.0, 1.0) == 0  # closed rectangles
-    # top surface at (0.6, 0) is the left-only patch
-    assert c.foot_allowed(0.6, 0.0, "left") and not c.foot_allowed(0.6, 0.0, "right")
+    assert c.patch_at(0.5, 1.0) == 0  # closed rectangles
+    # on the shared edge x = 0.5 the top surface is the left-only patch
+    assert c.patch_at(0.5, 0.0) == 1
+    assert c.foot_allowed(0.5, 0.0, "left") and not c.foot_allowed(0.5, 0.0, "right")
+    # overlapping patches (two surfaces at one point) are refused
+    with pytest.raises(CourseFormatError, match=r"^patches\[1\]: .*no overlap with patches\[0\]"):
+        Course("o", (Patch(-1.0, 1.0, -1.0, 1.0, 0.0), high))
 
 
 def test_foot_allowed() -> None:

@@ -10,8 +10,11 @@ Modules:
 
 - :mod:`.patch`: :class:`Patch` and :class:`Obstacle`;
 - :mod:`.course`: :class:`Course`, its validation and geometry queries;
+- :mod:`.checks`: the course-level checks and their bounds (no overlapping patches, a
+  start clear of obstacles, sizes, heights and counts);
 - :mod:`.bounds`: eq. (24) foothold boxes;
-- :mod:`.json_format`: the course file format (JSON), with errors naming the field;
+- :mod:`.json_format`: the course file format (JSON), with errors naming the field, and
+  bounded reading of course files (size, nesting depth, duplicate keys);
 - :mod:`.fields`: validation of single fields and query arguments;
 - :mod:`.builtin_courses`: the built-in and seeded courses and :func:`load_course`;
 - :mod:`.mjcf`: the course as MuJoCo geoms.

@@ -17,7 +17,7 @@ from gaitnet_mpc.terrain.fields import check_foot, point_xy
 from gaitnet_mpc.terrain.patch import Patch
 
 
-def _rect_distance(
+def rect_distance(
     x: float, y: float, x_min: float, x_max: float, y_min: float, y_max: float
 ) -> float:
     """Euclidean distance (m) from point (x, y) to a closed rectangle (0 inside)."""
@@ -68,7 +68,7 @@ def reachable_foothold_bounds(
             if best is None or score < best[0]:
                 best = (score, i)
         else:
-            gap = _rect_distance(xc, yc, lo[0], hi[0], lo[1], hi[1])
+            gap = rect_distance(xc, yc, lo[0], hi[0], lo[1], hi[1])
             if fallback is None or gap < fallback[0]:
                 fallback = (gap, i)
     chosen = best or fallback

@@ -9,6 +9,8 @@ next foothold, :meth:`Course.reachable_foothold_bounds` (computed in :mod:`.boun
 
 from __future__ import annotations
 
+import sys
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,24 +21,45 @@ from numpy.typing import ArrayLike
 
 from gaitnet_mpc.errors import CourseFormatError
 from gaitnet_mpc.terrain.bounds import reachable_foothold_bounds
+from gaitnet_mpc.terrain.checks import (
+    check_counts,
+    check_no_overlap,
+    check_obstacle_extent,
+    check_patch_extent,
+    check_start_clear,
+)
 from gaitnet_mpc.terrain.fields import EPS_M, check_foot, finite_number, layout_seed
 from gaitnet_mpc.terrain.json_format import (
+    MAX_JSON_DEPTH,
+    PROGRESS_FILE_BYTES,
     course_fields_from_dict,
     course_to_dict,
     read_course_json,
 )
-from gaitnet_mpc.terrain.patch import Obstacle, Patch, top_patch_index
+from gaitnet_mpc.terrain.patch import Obstacle, Patch, top_patch_index, top_patch_indices
 
 
 @dataclass(frozen=True)
 class Course:
     """A terrain course: patches (footholds), obstacles, and the start point.
 
-    Construction validates the whole course and raises :class:`CourseFormatError`:
-    at least one patch; the start point ``start_xy`` (m) lies on a patch allowing both
-    feet; every obstacle's centre lies on a patch and its ``z_base_m`` equals that
-    patch's top; ``seed`` is None or a non-negative integer.  Patches may overlap; where
-    they do the highest top wins.
+    Construction validates the whole course and raises :class:`CourseFormatError`
+    naming the field (checks in :mod:`.checks`, bounds with their reasons there):
+
+    - 1 to :data:`.checks.MAX_PATCHES` (20000) patches, at most
+      :data:`.checks.MAX_OBSTACLES` (2000) obstacles;
+    - every patch and obstacle side between :data:`.checks.MIN_SIDE_M` (0.01 m) and
+      :data:`.checks.MAX_SIDE_M` (500 m), every corner within
+      :data:`.checks.MAX_ABS_XY_M` (±1000 m) in x and y, every patch top within
+      :data:`.checks.MAX_ABS_Z_M` (±5 m), every obstacle at most
+      :data:`.checks.MAX_OBSTACLE_HEIGHT_M` (2 m) tall;
+    - the start point ``start_xy`` (m) lies on a patch allowing both feet;
+    - no two patches overlap: a point of the course has one surface.  Patches may touch
+      along edges (within ``EPS_M`` = 1 nm); on a shared edge the higher top wins;
+    - every obstacle's centre lies on a patch and its ``z_base_m`` equals that patch's
+      top, and no obstacle footprint comes within :data:`.checks.START_CLEARANCE_M`
+      (0.3 m) of the start point, where the robot stands;
+    - ``seed`` is None or a non-negative integer.
 
     ``seed`` records the seed that drew a randomised built-in layout (``uneven``,
     ``stepping-stones`` or ``gap`` given a seed); it is None for fixed layouts and files
@@ -79,25 +102,35 @@ class Course:
         object.__setattr__(self, "start_xy", start)
         object.__setattr__(self, "seed", layout_seed(self.seed, "seed"))
 
+        check_counts(len(patches), len(obstacles))
+        for i, p in enumerate(patches):
+            check_patch_extent(p, f"patches[{i}]")
+        for i, ob in enumerate(obstacles):
+            check_obstacle_extent(ob, f"obstacles[{i}]")
         if not any(p.feet == "both" and p.contains(*start) for p in patches):
             raise CourseFormatError(
                 "patches",
                 f"no patch allowing both feet under the start point {start}",
                 f"a patch with feet 'both' whose x and y ranges contain the start point {start}",
             )
-        for i, ob in enumerate(obstacles):
-            c = (ob.x_center_m, ob.y_center_m)
-            z_ground = self.ground_height_at(*c)
-            if z_ground is None:
+        check_no_overlap(patches)
+        centres = np.array([(ob.x_center_m, ob.y_center_m) for ob in obstacles]).reshape(-1, 2)
+        for i, k in enumerate(top_patch_indices(patches, centres).tolist()):
+            ob = obstacles[i]
+            if k < 0:
                 raise CourseFormatError(
-                    f"obstacles[{i}]", c, "its centre (x, y) to lie on a patch (obstacles stand)"
+                    f"obstacles[{i}]",
+                    (ob.x_center_m, ob.y_center_m),
+                    "its centre (x, y) to lie on a patch (obstacles stand)",
                 )
+            z_ground = patches[k].z_top_m
             if abs(ob.z_base_m - z_ground) > EPS_M:
                 raise CourseFormatError(
                     f"obstacles[{i}].z_base_m",
                     ob.z_base_m,
                     f"the top {z_ground} of the patch under its centre",
                 )
+        check_start_clear(obstacles, start)
 
     # ------------------------------------------------------------------ (de)serialisation
 
@@ -105,9 +138,18 @@ class Course:
     def from_dict(cls, d: Mapping[str, Any], *, default_name: str = "unnamed") -> Course:
         """Build and validate a course from the JSON-like dict of :mod:`.json_format`.
 
-        Errors name the offending field as a path, e.g. ``patches[2].x``.
+        Errors name the offending field as a path, e.g. ``patches[2].x``.  A value nested
+        too deeply to print in the message (deeper than the interpreter's recursion limit)
+        is reported as such, on field ``course``.
         """
-        return cls(**course_fields_from_dict(d, default_name=default_name))
+        try:
+            return cls(**course_fields_from_dict(d, default_name=default_name))
+        except RecursionError:
+            raise CourseFormatError(
+                "course",
+                "a value nested too deeply to print",
+                f"the course format, nested at most {MAX_JSON_DEPTH} deep",
+            ) from None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON-ready dict; ``Course.from_dict(c.to_dict()) == c``.
@@ -119,16 +161,31 @@ class Course:
 
     @classmethod
     def from_json(cls, path: str | Path) -> Course:
-        """Read and validate a course file; ``name`` defaults to the file stem."""
-        data = read_course_json(path)
-        return cls.from_dict(data, default_name=Path(path).stem)
+        """Read and validate a course file; ``name`` defaults to the file stem.
+
+        Reading is bounded (:func:`.json_format.read_course_json`: size, nesting depth,
+        duplicate keys); a file over :data:`.json_format.PROGRESS_FILE_BYTES` (1 MiB)
+        reports on stderr when it is read and when it has been checked.
+        """
+        t0_s = time.perf_counter()
+        read = read_course_json(path)
+        course = cls.from_dict(read.data, default_name=Path(path).stem)
+        if read.size_bytes > PROGRESS_FILE_BYTES:
+            print(
+                f"... {len(course.patches)} patches, {len(course.obstacles)} obstacles checked "
+                f"({time.perf_counter() - t0_s:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
+        return course
 
     # ------------------------------------------------------------------ point queries
 
     def patch_at(self, x: float, y: float) -> int | None:
         """Index of the patch whose closed xy-rectangle holds (x, y) [m], or None (a hole).
 
-        Where patches overlap, the one with the highest top wins (ties: lowest index).
+        Patches do not overlap; on an edge shared by two patches (within ``EPS_M``) the one
+        with the higher top wins (ties: lowest index).
         """
         return top_patch_index(self.patches, x, y)
 
@@ -144,8 +201,9 @@ class Course:
         """True iff the ``foot`` ("left"/"right") may land at (x, y) [m].
 
         That is: the point is on a patch whose ``feet`` is ``"both"`` or equals ``foot``.
-        Where patches overlap, only those forming the top surface (highest ``z_top_m``)
-        count.  Obstacles are not considered (they are handled by swing-height planning).
+        On an edge shared by two patches, only those forming the top surface (highest
+        ``z_top_m``) count.  Obstacles are not considered (they are handled by swing-height
+        planning).
         """
         foot = check_foot(foot)
         z = self.ground_height_at(x, y)

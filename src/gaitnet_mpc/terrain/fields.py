@@ -40,7 +40,10 @@ def finite_number(value: object, field_path: str) -> float:
     """Return ``value`` as a float, or raise if it is not a finite real number (bool refused)."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise CourseFormatError(field_path, value, "a finite number")
-    out = float(value)
+    try:
+        out = float(value)
+    except OverflowError:  # an int beyond the float range (e.g. 10**400)
+        out = math.inf
     if not math.isfinite(out):
         raise CourseFormatError(field_path, value, "a finite number")
     return out

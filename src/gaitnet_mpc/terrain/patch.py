@@ -143,3 +143,37 @@ def top_patch_index(patches: Sequence[Patch], x: float, y: float) -> int | None:
         if p.contains(x, y) and (best is None or p.z_top_m > patches[best].z_top_m):
             best = i
     return best
+
+
+def footprints(items: Sequence[Patch] | Sequence[Obstacle]) -> np.ndarray:
+    """``(n, 4)`` array of the items' xy-rectangles, rows ``[x_min, x_max, y_min, y_max]`` [m]."""
+    rows = [(r.x_min, r.x_max, r.y_min, r.y_max) for r in items]
+    return np.array(rows, dtype=float).reshape(-1, 4)
+
+
+#: Point-patch pairs tested per NumPy block in :func:`top_patch_indices`.
+_POINT_BLOCK = 1 << 20
+
+
+def top_patch_indices(patches: Sequence[Patch], xy_m: np.ndarray) -> np.ndarray:
+    """:func:`top_patch_index` of many points at once: ``xy_m`` (m, 2) [m] -> (m,) indices,
+    -1 over a hole.  Same rule (closed rectangles within ``EPS_M``, highest top, ties to
+    the lowest index), vectorised over the patches in blocks of points."""
+    pts = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    r = footprints(patches)
+    z = np.array([p.z_top_m for p in patches], dtype=float)
+    out = np.full(pts.shape[0], -1, dtype=int)
+    if r.size == 0:
+        return out
+    step = max(1, _POINT_BLOCK // r.shape[0])
+    for s in range(0, pts.shape[0], step):
+        x, y = pts[s : s + step, :1], pts[s : s + step, 1:]
+        inside = (
+            (r[:, 0] - EPS_M <= x)
+            & (x <= r[:, 1] + EPS_M)
+            & (r[:, 2] - EPS_M <= y)
+            & (y <= r[:, 3] + EPS_M)
+        )
+        best = np.argmax(np.where(inside, z, -np.inf), axis=1)
+        out[s : s + step] = np.where(inside.any(axis=1), best, -1)
+    return out
