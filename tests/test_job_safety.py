@@ -341,3 +341,49 @@ def test_collect_killed_mid_run_resumes_to_the_uninterrupted_folder(tmp_path: Pa
     for name in ("set_000.parquet", "set_001.parquet"):
         assert _sha256(killed / name) == _sha256(tmp_path / "whole" / name), name
     assert json.loads((killed / "status.json").read_text())["state"] == "done"
+
+
+# ----------------------------------------------------------------------------- results
+def test_a_duration_above_an_hour_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert _stand(tmp_path / "r", duration_s="3601") == 2
+    assert "--duration: got 3601.0, expected a simulated time in [0.01, 3600] s" in (
+        capsys.readouterr().err
+    )
+
+
+def test_the_step_in_progress_at_the_end_is_drawn_apart(
+    stand_run: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from dataclasses import replace
+
+    from gaitnet_mpc.results import plots
+    from gaitnet_mpc.results.rundir import load_run
+
+    figures = []
+    monkeypatch.setattr(plots, "save_figure_atomic", lambda fig, path: figures.append(fig))
+    run = load_run(stand_run)
+    run = replace(run, summary={**run.summary, "step_durations_s": [0.225, 0.25, 0.3]})
+    plots.plot_steps(run, stand_run / "plots" / "steps.png")
+
+    bars = [p for p in figures[0].axes[0].patches if p.get_height() > 0]
+    assert [round(b.get_height(), 3) for b in bars] == [0.225, 0.25, 0.3]
+    assert [bool(b.get_hatch()) for b in bars] == [False, False, True]  # the last: unfinished
+    legend = figures[0].axes[0].get_legend()
+    assert "unfinished" in legend.get_texts()[0].get_text()
+
+
+def test_an_import_error_caused_by_an_interrupt_stops_as_an_interrupt() -> None:
+    """A Ctrl-C during a compiled extension's initialisation reaches Python as an
+    ImportError caused by the KeyboardInterrupt: it must stop, not read as 'not
+    installed' (seen with ``import piqp`` under load)."""
+    from gaitnet_mpc.errors import reraise_interrupt
+
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ki:
+            raise ImportError("initialization failed") from ki
+    except ImportError as exc:
+        with pytest.raises(KeyboardInterrupt):
+            reraise_interrupt(exc)
+    reraise_interrupt(ImportError("No module named 'piqp'"))  # a real absence: no raise

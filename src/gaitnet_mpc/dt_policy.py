@@ -21,9 +21,9 @@ iterations (Algorithm 1, line 8). The policies (built by
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
+from gaitnet_mpc.config import SEED_INTERVAL, SEED_REASON, bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 
 #: The paper's nominal sampling time ``dt^0`` [s]: a 0.225 s step (Table VIII).
@@ -33,6 +33,21 @@ NOMINAL_DT_S = 0.045
 #: of ``gaitnet-mpc run --dt``. 0.03 s is Table V's lower bound (the biped); 0.2 s (a 1 s
 #: step) is past any walking gait of these robots.
 ACCEPTED_DT_RANGE_S = (0.03, 0.2)
+
+#: The control tick [s]: the simulator steps the physics and calls the controller at 1 kHz
+#: (``SimConfig.timestep_s``, the robots' MJCF ``timestep``), so no period of a controller
+#: can be shorter.
+CONTROL_TICK_S = 1e-3
+#: The declared range of a controller's period (:func:`~gaitnet_mpc.config.bounded`).
+PERIOD_INTERVAL = f"[{CONTROL_TICK_S}, 1] s"
+PERIOD_REASON = "at least one 1 kHz control tick; 1 s is several steps"
+
+#: :data:`ACCEPTED_DT_RANGE_S` as the declared range of a dt field
+#: (:func:`~gaitnet_mpc.config.bounded`), with its reason.
+ACCEPTED_DT_INTERVAL = f"[{ACCEPTED_DT_RANGE_S[0]}, {ACCEPTED_DT_RANGE_S[1]}] s"
+ACCEPTED_DT_REASON = "Table V's lowest dt; 0.2 s is a 1 s step"
+#: The duration of a step of h' = 5 stages of an accepted dt.
+_STEP_INTERVAL = f"[{5 * ACCEPTED_DT_RANGE_S[0]:g}, {5 * ACCEPTED_DT_RANGE_S[1]:g}] s"
 
 #: The paper's bounds of a chosen dt [s], by robot kind (``RobotSpec.planar``): the
 #: humanoid's [0.045, 0.07] s (Sec. V-E1, Fig. 9) and the planar biped's [0.03, 0.06] s
@@ -68,13 +83,6 @@ def oracle_grid_s(
     return tuple(float(round(lo + i * (hi - lo) / max(n - 1, 1), 6)) for i in range(n))
 
 
-def check_bounds(field_name: str, bounds_s: tuple[float, float]) -> None:
-    """:class:`ConfigError` unless ``bounds_s`` is (min, max) with 0 < min <= max < inf."""
-    lo, hi = bounds_s
-    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo <= hi):
-        raise ConfigError(field_name, bounds_s, "(min, max) with 0 < min <= max [s]")
-
-
 @dataclass(frozen=True)
 class GaitNetPolicyConfig:
     """Safeguards of the Gait-Net dt policy (:class:`~gaitnet_mpc.gaitnet.policy.GaitNetDt`;
@@ -91,21 +99,16 @@ class GaitNetPolicyConfig:
             6/10 without a limit and 9/10 with 1 (gaitnet_runs_tuning.md).
     """
 
-    max_spread_s: float = 0.006
-    cycle_tolerance_s: float = 5e-4
-    max_damped: int = 3
+    max_spread_s: float = bounded(0.006, "(0, 0.2] s", "a spread", "0.2 s spans every dt")
+    cycle_tolerance_s: float = bounded(
+        5e-4, "(0, 0.02] s", "a dt change", "20 ms is most of the paper's 0.045-0.07 s bounds"
+    )
+    max_damped: int = bounded(3, "[0, 100]", "an integer", "100 is twice Table X's j_max")
     safeguards: bool = True
-    max_retimes: int | None = 2
+    max_retimes: int | None = bounded(2, "[1, 100]", "an integer", "None: no limit")
 
     def __post_init__(self) -> None:
-        for name in ("max_spread_s", "cycle_tolerance_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigError(name, value, "a value > 0")
-        if self.max_damped < 0:
-            raise ConfigError("max_damped", self.max_damped, "an integer >= 0")
-        if self.max_retimes is not None and self.max_retimes < 1:
-            raise ConfigError("max_retimes", self.max_retimes, "None or an integer >= 1")
+        check_ranges(self)
 
 
 @dataclass(frozen=True)
@@ -129,26 +132,24 @@ class DtPolicyConfig:
     """
 
     kind: str = "fixed"
-    dt_s: float | None = None
-    bounds_s: tuple[float, float] | None = None
+    dt_s: float | None = bounded(None, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON)
+    bounds_s: tuple[float, float] | None = bounded(
+        None, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON, ordered=True
+    )
     gaitnet_weights: str | None = None
     gaitnet: GaitNetPolicyConfig = field(default_factory=GaitNetPolicyConfig)
-    oracle_grid_step_s: float = ORACLE_GRID_STEP_S
-    drawn_step_range_s: tuple[float, float] = (0.15, 0.40)
-    drawn_seed: int = 0
+    oracle_grid_step_s: float = bounded(
+        ORACLE_GRID_STEP_S, "[0.001, 0.1] s", "a grid step", "a solve per dt; 1 ms: 26 a step"
+    )
+    drawn_step_range_s: tuple[float, float] = bounded(
+        (0.15, 0.40), _STEP_INTERVAL, "a step duration", "5 stages of a dt in [0.03, 0.2] s", True
+    )
+    drawn_seed: int = bounded(0, SEED_INTERVAL, "a seed", SEED_REASON)
 
     def __post_init__(self) -> None:
+        check_ranges(self)
         if self.kind not in DT_POLICIES:
             raise ConfigError("kind", self.kind, f"one of {', '.join(DT_POLICIES)}")
-        lo, hi = ACCEPTED_DT_RANGE_S
-        if self.dt_s is not None and not (math.isfinite(self.dt_s) and lo <= self.dt_s <= hi):
-            raise ConfigError("dt_s", self.dt_s, f"None or a sampling time in [{lo:g}, {hi:g}] s")
-        if self.bounds_s is not None:
-            check_bounds("bounds_s", self.bounds_s)
-        step = self.oracle_grid_step_s
-        if not (math.isfinite(step) and step > 0.0):
-            raise ConfigError("oracle_grid_step_s", step, "a time step > 0 s")
-        check_bounds("drawn_step_range_s", self.drawn_step_range_s)
 
     def bounds_for(self, planar: bool) -> tuple[float, float]:
         """The (min, max) dt [s] of a chosen dt on a planar or 3-D robot."""

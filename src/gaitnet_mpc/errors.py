@@ -78,3 +78,21 @@ class PartialFailure(GaitNetMPCError):
 
     def __reduce__(self) -> tuple[type, tuple[str, list[str], str]]:
         return (type(self), (self.what, self.failed, self.log))
+
+
+def reraise_interrupt(exc: BaseException) -> None:
+    """Raise :class:`KeyboardInterrupt` if ``exc`` was caused by one.
+
+    A Ctrl-C or SIGTERM that arrives while a compiled extension initialises (``import
+    piqp``) reaches Python as ``ImportError('initialization failed')`` with the
+    interrupt as its cause. Code that treats an ImportError as "not installed" calls this
+    first, so that an interrupted start-up stops (exit 130) instead of reporting a
+    missing package.
+    """
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            raise KeyboardInterrupt from exc
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__

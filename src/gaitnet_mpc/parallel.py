@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.errors import ConfigError, reraise_interrupt
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -170,7 +170,8 @@ def run_ray(
     _check_workers(workers)
     try:
         import ray
-    except ImportError:
+    except ImportError as exc:
+        reraise_interrupt(exc)
         raise ConfigError(
             "--backend", "ray", "Ray installed (pip install 'gaitnet-mpc[ray]')"
         ) from None

@@ -7,7 +7,7 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.errors import ConfigError, reraise_interrupt
 
 if TYPE_CHECKING:
     from gaitnet_mpc.sim.simulator import Simulator
@@ -31,6 +31,7 @@ def _glfw_can_open() -> str | None:
     try:
         import glfw
     except ImportError as exc:  # pragma: no cover - glfw is a mujoco dependency
+        reraise_interrupt(exc)
         return f"the glfw package is missing ({exc})"
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -8,12 +8,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from functools import partial
 
-import numpy as np
-
-from gaitnet_mpc.config import load_preset, preset_names
+from gaitnet_mpc.config import bounded, check_ranges, load_preset, preset_names
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
-from gaitnet_mpc.dt_policy import DtPolicyConfig
+from gaitnet_mpc.control.walking import (
+    ACCEL_INTERVAL,
+    ACCEL_REASON,
+    DEPTH_INTERVAL,
+    DEPTH_REASON,
+    RETURN_INTERVAL,
+    RETURN_REASON,
+)
+from gaitnet_mpc.dt_policy import PERIOD_INTERVAL, PERIOD_REASON, DtPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import SwingConfig
 from gaitnet_mpc.gait.preview import PreviewConfig
@@ -67,12 +73,13 @@ LATERAL_RETURN_TIME_S = 0.7
 class KDWalkConfig:
     """Settings of the kino-dynamic walking controller."""
 
-    replan_period_s: float = 0.02
+    replan_period_s: float = bounded(0.02, PERIOD_INTERVAL, "a period", PERIOD_REASON)
     # QPs at most per replan within a step (a step start always runs up to
     # ``sequential.j_max``). 1: the real-time-iteration replan (one QP from the new state,
     # benchmarks/results/replan_outcomes.md and perf.md measure what it costs and saves).
-    replan_j_max: int = 50
-    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
+    replan_j_max: int = bounded(50, "[1, 1000]", "an integer", "1: one QP per replan")
+    # the command is ramped up from rest at this rate
+    max_accel_mps2: float = bounded(1.0, ACCEL_INTERVAL, "an acceleration", ACCEL_REASON)
     sequential: SequentialConfig = field(
         default_factory=lambda: SequentialConfig(kd=walking_kd_config())
     )
@@ -84,7 +91,11 @@ class KDWalkConfig:
     # from its centre) on the patch, plus 5 mm for the landing error (within +-4 mm with
     # the swing feedforward). With 0.05 the heel or toe overhung an edge and the foot
     # slid off it during stance (gap at dt 0.045 / 0.055 / 0.065: 1 violation each).
-    foothold_margin_m: float = 0.08
+    # At most 0.09 m: a larger margin leaves no box on the shortest built-in stones (0.18 m
+    # long, seeded stepping-stones; terrain/builtin_courses.py).
+    foothold_margin_m: float = bounded(
+        0.08, "[0, 0.09] m", "a margin", "under half the shortest built-in stone, 0.18 m"
+    )
     # One-step preview (reach rule, below): the box's margin across the patch [m]. The
     # foot is 2 cm wide, so 0.03 m keeps it on the patch with 2 cm to spare (the multi-step
     # preview's PreviewConfig.foothold_margin_y_m is the same). With 0.08 (until 2026-12,
@@ -92,41 +103,50 @@ class KDWalkConfig:
     # the MPC's touchdowns pressed its inner edge. Chosen with foothold_reach_m on tuning
     # seeds 100-109 (docs/design/foothold_margin.md): 0.02 / 0.03 / 0.04 / 0.05 m gave
     # 8 (with 5 violations) / 8 / 6 / 5 of 10 stone layouts clean for gaitnet.
-    foothold_margin_y_m: float = 0.03
+    foothold_margin_y_m: float = bounded(
+        0.03, "[0, 0.1] m", "a margin", "under half the narrowest built-in stone, 0.20 m"
+    )
     # |x_foot - x_com| at touchdown within which the reach rule considers a patch [m].
     # 0.2 (until 2026-12) left the next stone out of reach behind a platform's edge, so the
     # robot took a zero-length step there and then a long one it could not stop from.
     # Tuning seeds 100-109, stone layouts clean for gaitnet: 1/10 with 0.2 m (0.08 m across),
     # 4/10 with 0.3 m alone; with a 0.04 m lateral margin 0.25 / 0.3 / 0.35 m gave 3 / 6 / 6.
-    foothold_reach_m: float = 0.3
-    touchdown_depth_m: float = 0.003  # swing targets end this far below the planned foothold
+    foothold_reach_m: float = bounded(0.3, "[0, 1] m", "a distance", "1 m is past any step")
+    # swing targets end this far below the planned foothold
+    touchdown_depth_m: float = bounded(0.003, DEPTH_INTERVAL, "a depth", DEPTH_REASON)
     # The swing foot follows each replan's touchdown until this fraction of the step; later
     # it keeps its aim, so that a last-moment change does not jerk the foot just before it
     # lands. Set when the retargeting was written, not tuned.
-    retarget_until_phase: float = 0.85
+    retarget_until_phase: float = bounded(0.85, "(0, 1]", "a phase", "a fraction of the step")
     # Obstacles the swing trajectory clears: those from this far behind the lift-off to
     # this far beyond the target, along x [m] (behind, ahead); the foot is 0.15 m long.
-    swing_obstacle_window_m: tuple[float, float] = (0.1, 0.2)
+    swing_obstacle_window_m: tuple[float, float] = bounded(
+        (0.1, 0.2), "[0, 1] m", "a distance", "1 m is past any step"
+    )
     # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
     # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
     # with feet at +-lip_half_width_m beside a centre line (see _lip_reference). "line"
     # plans a near-tightrope (feet 2-7 cm apart); "lip" a 0.19 m wide gait, but then the
     # feet at patch edges fail more often (docs/design/lateral_reference.md).
     lateral_reference: str = "line"
-    lip_half_width_m: float = 0.07
+    lip_half_width_m: float = bounded(0.07, "[0, 0.3] m", "a distance", "the hips are 0.13 m apart")
     # Lowest CoM height [m] the LIP sway orbit's frequency sqrt(g / z) is computed with, a
     # guard against a reference height near 0 (the humanoid stands at 0.55 m; never active
     # in a walk measured here).
-    lip_min_com_height_m: float = 0.2
+    lip_min_com_height_m: float = bounded(
+        0.2, "(0, 1] m", "a height", "> 0 for sqrt(g / z); the humanoid stands at 0.55 m"
+    )
     # Clamp of the orbit centre line's lateral correction toward the commanded path [m];
     # None: the centre is the commanded path itself.
-    lip_anchor_max_m: float | None = None
+    lip_anchor_max_m: float | None = bounded(None, "[0, 1] m", "a distance", "None: no clamp")
     # With the "line" reference: the CoM's lateral offset from the commanded path decays
     # along the horizon with this time constant [s] (None: the line starts at the CoM and
     # nothing pulls the robot back to its path). With the feet kept apart the robot
     # drifts sideways without it (gap, dt 0.045: 0.62 m, then a fall); the 0.7 s value was
     # chosen on the built-in stepping stones (docs/design/lateral_return.md).
-    lateral_return_time_s: float | None = LATERAL_RETURN_TIME_S
+    lateral_return_time_s: float | None = bounded(
+        LATERAL_RETURN_TIME_S, RETURN_INTERVAL, "a time constant", RETURN_REASON
+    )
     # Multi-step footstep preview (gait/preview.py): a LIP plan of the next steps chooses
     # the swing foot's patch (eq. 24 box) and the touchdown x, and gives the CoM x
     # reference of eq. 18. None: one-step preview (patch by reach).
@@ -140,7 +160,7 @@ class KDWalkConfig:
     # or heel the box foot tips onto one edge, loses its yaw friction and spins (2 pivots
     # and 2 slips in 6 s of flat walking with 1.0, none with 0.6). 0.6 was chosen on
     # tuning seeds 100-109 (docs/design/cop_margin.md).
-    cop_fraction: float = 0.6
+    cop_fraction: float = bounded(0.6, "(0, 1]", "a fraction", "of toe and heel; 1: the whole foot")
     # dt^0 of a step (Algorithm 1 line 3: the dt its first iteration plans with, and the
     # dt of the horizon's next step): False: the policy's nominal dt, as the paper
     # (f_ref with "a nominal sampling duration dt^0"); True: the dt the previous step
@@ -152,29 +172,11 @@ class KDWalkConfig:
 
     def __post_init__(self) -> None:
         j = self.replan_j_max
-        if isinstance(j, bool) or not isinstance(j, int) or j < 1:
-            raise ConfigError("replan_j_max", j, "an integer >= 1 (1: one QP per replan)")
-        if not (0.0 < self.cop_fraction <= 1.0):
-            raise ConfigError("cop_fraction", self.cop_fraction, "a fraction in (0, 1]")
+        if isinstance(j, bool) or not isinstance(j, int):
+            raise ConfigError("replan_j_max", j, "an integer")
+        check_ranges(self)
         if self.lateral_reference not in ("line", "lip"):
             raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
-        for name in ("foothold_margin_m", "foothold_margin_y_m", "foothold_reach_m"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0.0):
-                raise ConfigError(name, value, "a finite distance >= 0 m")
-        if not 0.0 < self.retarget_until_phase <= 1.0:
-            raise ConfigError(
-                "retarget_until_phase", self.retarget_until_phase, "a phase in (0, 1]"
-            )
-        if not (np.isfinite(self.lip_min_com_height_m) and self.lip_min_com_height_m > 0.0):
-            raise ConfigError("lip_min_com_height_m", self.lip_min_com_height_m, "a height > 0 m")
-        if not all(np.isfinite(d) and d >= 0.0 for d in self.swing_obstacle_window_m):
-            raise ConfigError(
-                "swing_obstacle_window_m", self.swing_obstacle_window_m, "two distances >= 0 m"
-            )
-        tau = self.lateral_return_time_s
-        if tau is not None and not (np.isfinite(tau) and tau > 0.0):
-            raise ConfigError("lateral_return_time_s", tau, "None or a finite time > 0 s")
 
 
 def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:

@@ -28,25 +28,36 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.kinematics.leg_ik import leg_geometries, whole_body_ik
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
+
+_KP, _KP_REASON = "[0, 1000] N m/rad", "1000 saturates a 33.5 N m hip at 0.03 rad"
+_KD, _KD_REASON = "[0, 100] N m s/rad", "100 saturates a 33.5 N m hip at 0.3 rad/s"
 
 
 @dataclass(frozen=True)
 class LowLevelConfig:
     """Gains of the low-level controller."""
 
-    swing_kp_nm_per_rad: float = 60.0
-    swing_kd_nms_per_rad: float = 2.0
-    stance_kd_nms_per_rad: float = 0.3
-    stance_yaw_kp_nm_per_rad: float = 0.0  # trunk-yaw feedback on the stance hip yaw
-    stance_yaw_kd_nms_per_rad: float = 0.0
-    arm_kp_nm_per_rad: float = 20.0
-    arm_kd_nms_per_rad: float = 0.5
-    arm_counter_swing: float = 0.6
-    ik_lookahead_s: float = 0.005
-    swing_accel_ff: float = 0.0  # fraction of the swing legs' inertial feedforward [-]
+    swing_kp_nm_per_rad: float = bounded(60.0, _KP, "a stiffness", _KP_REASON)
+    swing_kd_nms_per_rad: float = bounded(2.0, _KD, "a damping", _KD_REASON)
+    stance_kd_nms_per_rad: float = bounded(0.3, _KD, "a damping", _KD_REASON)
+    # trunk-yaw feedback on the stance hip yaw
+    stance_yaw_kp_nm_per_rad: float = bounded(0.0, _KP, "a stiffness", _KP_REASON)
+    stance_yaw_kd_nms_per_rad: float = bounded(0.0, _KD, "a damping", _KD_REASON)
+    arm_kp_nm_per_rad: float = bounded(20.0, _KP, "a stiffness", _KP_REASON)
+    arm_kd_nms_per_rad: float = bounded(0.5, _KD, "a damping", _KD_REASON)
+    # the arm's shoulder pitch swings by this fraction of the other leg's hip pitch [-]
+    arm_counter_swing: float = bounded(0.6, "[0, 2]", "a ratio", "0: arms still; 2: twice the hip")
+    # time step of the swing IK's lookahead (the feedforward divides by its square) [s]
+    ik_lookahead_s: float = bounded(0.005, "(0, 0.1] s", "a lookahead", "0.1 s: half a step")
+    # fraction of the swing legs' inertial feedforward [-]
+    swing_accel_ff: float = bounded(0.0, "[0, 2]", "a fraction", "1: the model's full term")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
 
 class LowLevelController:

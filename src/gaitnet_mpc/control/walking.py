@@ -53,10 +53,18 @@ import numpy as np
 import pinocchio as pin
 
 from gaitnet_mpc.command import Command
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking_base import WalkingBase
-from gaitnet_mpc.dt_policy import NOMINAL_DT_S
+from gaitnet_mpc.dt_policy import (
+    ACCEPTED_DT_INTERVAL,
+    ACCEPTED_DT_REASON,
+    NOMINAL_DT_S,
+    PERIOD_INTERVAL,
+    PERIOD_REASON,
+)
+from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import (
     GaitScheduleConfig,
     LandingBias,
@@ -71,48 +79,78 @@ from gaitnet_mpc.geometry import heading_axes, rotate2, to_heading2
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
+#: Declared ranges shared by the walking controllers' settings (KDWalkConfig, WalkingConfig,
+#: WBWalkConfig): the command's ramp rate, a swing target's depth below the ground and the
+#: time constant of a return to the commanded path.
+ACCEL_INTERVAL, ACCEL_REASON = "(0, 10] m/s^2", "> 0 to start; 10 m/s^2 is about 1 g"
+DEPTH_INTERVAL, DEPTH_REASON = "[0, 0.05] m", "below the foothold; 5 cm is into the ground"
+RETURN_INTERVAL, RETURN_REASON = "(0, 10] s", "None: off; past 10 s it is too slow to act"
+_STANDS = "the humanoid's CoM stands 0.55 m high"
+_FAR = "1 m is past any tracking error"
+_HIPS = "the hips are 0.13 m apart"
+_REACH = "1 m is past the legs' reach"
+
 
 @dataclass(frozen=True)
 class WalkingConfig:
     """Settings shared by the walking controllers (gait, footholds, swing, low level)."""
 
-    dt_s: float = NOMINAL_DT_S  # MPC stage = 1/5 of a step [s]
-    replan_period_s: float = 0.01
-    com_height_m: float | None = None  # walking CoM height; default: reset height + offset
+    # MPC stage = 1/5 of a step [s]
+    dt_s: float = bounded(NOMINAL_DT_S, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON)
+    replan_period_s: float = bounded(0.01, PERIOD_INTERVAL, "a period", PERIOD_REASON)
+    # walking CoM height; default: reset height + offset
+    com_height_m: float | None = bounded(None, "(0, 1.5] m", "a height", _STANDS)
     # Walk with bent knees: at the standing height (knee 0.7 rad) a leg reaching 0.12 m
     # or more ahead at touchdown is nearly straight; the knee then locks at its limit,
     # carries the load with no torque and vaults the CoM up, so the MPC loses control of
     # the height and the swing leg cannot reach its foothold. 3 cm lower bends the knee
     # to about 1.0 rad (knee torque for m g about 18 N m of the 67 N m available).
-    com_height_offset_m: float = -0.03
-    com_height_ramp_s: float = 0.5  # the height reference moves there over this time
-    max_pos_error_m: float = 0.05  # clamp of the position-tracking error in the reference
-    path_max_error_m: float = 0.10  # anti-windup: the commanded path stays this close
-    max_accel_mps2: float = 1.0  # the command is ramped up from rest at this rate
-    path_gain_per_s: float = 1.0  # CoM path error -> velocity added to the foothold command
-    max_path_feedback_mps: float = 0.2  # bound of that added velocity
-    retarget_stop_fraction: float = 0.8  # footholds are frozen in the last 20 % of a swing
-    stance_half_width_m: float = 0.07  # lateral CoM-to-foot distance of the sway orbit
-    max_step_m: float = 0.35  # forward/backward foothold limit from the stance foot
-    min_lateral_separation_m: float = 0.08  # feet never closer sideways (legs collide)
+    com_height_offset_m: float = bounded(
+        -0.03, "[-0.3, 0.05] m", "an offset", "-0.3 m is a deep squat; straight legs: +0.04 m"
+    )
+    # the height reference moves there over this time
+    com_height_ramp_s: float = bounded(0.5, "[0, 10] s", "a duration", "0: at once")
+    # clamp of the position-tracking error in the reference
+    max_pos_error_m: float = bounded(0.05, "[0, 1] m", "a distance", _FAR)
+    # anti-windup: the commanded path stays this close
+    path_max_error_m: float = bounded(0.10, "[0, 1] m", "a distance", _FAR)
+    # the command is ramped up from rest at this rate
+    max_accel_mps2: float = bounded(1.0, ACCEL_INTERVAL, "an acceleration", ACCEL_REASON)
+    # CoM path error -> velocity added to the foothold command
+    path_gain_per_s: float = bounded(1.0, "[0, 20] 1/s", "a gain", "20 /s acts within a stage")
+    # bound of that added velocity
+    max_path_feedback_mps: float = bounded(
+        0.2, "[0, 2] m/s", "a speed", "past the fastest command, 1.5 m/s"
+    )
+    # footholds are frozen in the last 20 % of a swing
+    retarget_stop_fraction: float = bounded(0.8, "[0, 1]", "a fraction", "of the swing")
+    # lateral CoM-to-foot distance of the sway orbit
+    stance_half_width_m: float = bounded(0.07, "[0, 0.3] m", "a distance", _HIPS)
+    # forward/backward foothold limit from the stance foot
+    max_step_m: float = bounded(0.35, "(0, 1] m", "a distance", _REACH)
+    # feet never closer sideways (legs collide)
+    min_lateral_separation_m: float = bounded(0.08, "[0, 1] m", "a distance", _REACH)
     # Widest step sideways from the stance foot. The hip roll reaches 0.6 rad outward, about
     # 0.22 m beside the hip at walking height, so 0.40 m between the feet is reachable;
     # it is what catching a 10 N s sideways push needs (0.30 m was not enough).
-    max_lateral_separation_m: float = 0.40
-    early_touchdown_phase: float = 0.5  # swing contact after this phase = touchdown
-    min_swing_s: float = 0.08  # a shorter swing is skipped (the foot stays down)
+    max_lateral_separation_m: float = bounded(0.40, "[0, 1] m", "a distance", _REACH)
+    # swing contact after this phase = touchdown
+    early_touchdown_phase: float = bounded(0.5, "[0, 1]", "a phase", "of the swing")
+    # a shorter swing is skipped (the foot stays down)
+    min_swing_s: float = bounded(0.08, "[0, 1] s", "a duration", "1 s: 5 stages of 0.2 s")
     # Forward/backward reach of a foothold from the CoM predicted at touchdown (heading
     # frame): about the hip's reach with the knee still bent at walking height. A foothold
     # beyond it is not reached; the foot then lands late and short of the plan.
-    max_reach_m: float = 0.20
+    max_reach_m: float = bounded(0.20, "(0, 1] m", "a distance", _REACH)
     # Swing-tracking bias compensation: the joint-PD swing leg (no inertial feedforward)
     # lands the foot 3 cm (0.5 m/s) to 5 cm (1 m/s) beyond its target, which puts the
     # stance foot ahead of where the LIP law wants it and costs ~10 % of the speed. The
     # overshoot (touchdown point minus swing target, heading frame, lateral outward) is
     # averaged over steps and subtracted from later swing targets; the MPC and the LIP
     # keep using the intended foothold.
-    landing_bias_gain: float = 0.3  # per-step weight of the new measurement
-    landing_bias_max_m: float = 0.06
+    # per-step weight of the new measurement
+    landing_bias_gain: float = bounded(0.3, "(0, 1]", "a weight", "an exponential average's")
+    landing_bias_max_m: float = bounded(0.06, "[0, 0.3] m", "a bound", _FAR)
     # Stance legs get tau = [g(q) - J^T lambda]_leg (control/stance.py with qdd = 0) rather
     # than -J^T lambda alone: without the leg's own gravity torques the ground reaction
     # exceeds the MPC's wrench by about 12 N (the weight of the lower leg pushing on the
@@ -123,7 +161,17 @@ class WalkingConfig:
     swing: SwingConfig = field(
         default_factory=lambda: SwingConfig(touchdown_speed_mps=0.3, foot_half_length_m=0.075)
     )
-    touchdown_depth_m: float = 0.005  # swing targets end this far below the ground
+    # swing targets end this far below the ground
+    touchdown_depth_m: float = bounded(0.005, DEPTH_INTERVAL, "a depth", DEPTH_REASON)
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+        if self.min_lateral_separation_m > self.max_lateral_separation_m:
+            raise ConfigError(
+                "min_lateral_separation_m",
+                self.min_lateral_separation_m,
+                f"<= max_lateral_separation_m = {self.max_lateral_separation_m} m",
+            )
 
 
 def swing_beside_stance(

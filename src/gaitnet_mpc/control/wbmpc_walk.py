@@ -34,7 +34,6 @@ is made for flat ground (the data-collection protocol), and says so in the run's
 
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
@@ -42,8 +41,15 @@ from typing import NamedTuple
 import numpy as np
 
 from gaitnet_mpc.command import Command
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainView
+from gaitnet_mpc.control.walking import (
+    ACCEL_INTERVAL,
+    ACCEL_REASON,
+    RETURN_INTERVAL,
+    RETURN_REASON,
+)
 from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, RaibertConfig, RaibertHeuristic
@@ -62,6 +68,9 @@ from gaitnet_mpc.mpc.wholebody.nlp import SOLVERS
 from gaitnet_mpc.mpc.wholebody.problem import swing_height_profile
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
+
+_KP, _KP_REASON = "[0, 1000] N m/rad", "1000 saturates a 33.5 N m hip at 0.03 rad"
+_KD, _KD_REASON = "[0, 100] N m s/rad", "100 saturates a 33.5 N m hip at 0.3 rad/s"
 
 
 class ReferenceVelocity(NamedTuple):
@@ -105,35 +114,28 @@ class WBWalkConfig:
     mpc: WBConfig = field(default_factory=lambda: WBConfig(weights=WBWeights(terminal_scale=10.0)))
     solver: str = "ipopt"
     step_durations: StepDurations = field(default_factory=StepDurations)
-    joint_kp_nm_per_rad: float = 50.0
-    joint_kd_nms_per_rad: float = 1.0
-    max_accel_mps2: float = 1.0
-    path_max_error_m: float = 0.03
-    stance_half_width_m: float = 0.07
-    lateral_return_time_s: float | None = 0.7
-    heading_return_time_s: float | None = 0.5
-    lateral_return_max_mps: float = 0.2
-    heading_return_max_radps: float = 0.5
+    joint_kp_nm_per_rad: float = bounded(50.0, _KP, "a stiffness", _KP_REASON)
+    joint_kd_nms_per_rad: float = bounded(1.0, _KD, "a damping", _KD_REASON)
+    max_accel_mps2: float = bounded(1.0, ACCEL_INTERVAL, "an acceleration", ACCEL_REASON)
+    path_max_error_m: float = bounded(0.03, "[0, 1] m", "a distance", "1 m is past any error")
+    stance_half_width_m: float = bounded(0.07, "[0, 0.3] m", "a distance", "hips 0.13 m apart")
+    lateral_return_time_s: float | None = bounded(
+        0.7, RETURN_INTERVAL, "a time constant", RETURN_REASON
+    )
+    heading_return_time_s: float | None = bounded(
+        0.5, RETURN_INTERVAL, "a time constant", RETURN_REASON
+    )
+    lateral_return_max_mps: float = bounded(
+        0.2, "[0, 2] m/s", "a speed", "past the fastest command, 1.5 m/s"
+    )
+    heading_return_max_radps: float = bounded(
+        0.5, "[0, 10] rad/s", "a yaw rate", "10 rad/s turns half round in 0.3 s"
+    )
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVERS:
             raise ConfigError("solver", self.solver, f"one of {SOLVERS}")
-        for name in (
-            "joint_kp_nm_per_rad",
-            "joint_kd_nms_per_rad",
-            "path_max_error_m",
-            "lateral_return_max_mps",
-            "heading_return_max_radps",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ConfigError(name, value, "a finite value >= 0")
-        for name in ("lateral_return_time_s", "heading_return_time_s"):
-            value = getattr(self, name)
-            if value is not None and not (math.isfinite(value) and value > 0.0):
-                raise ConfigError(name, value, "None or a finite time > 0 s")
-        if not (math.isfinite(self.max_accel_mps2) and self.max_accel_mps2 > 0.0):
-            raise ConfigError("max_accel_mps2", self.max_accel_mps2, "a value > 0 m/s^2")
+        check_ranges(self)
         lo, hi = self.mpc.dt_min_s, self.mpc.dt_max_s
         d = self.step_durations
         if not lo <= d.dt_s <= hi:

@@ -42,6 +42,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import Bounds, LinearConstraint, milp
 
+from gaitnet_mpc.config import bounded, check_ranges, weight
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.robots.spec import FEET
@@ -50,57 +51,61 @@ from gaitnet_mpc.terrain import Course
 __all__ = ["PreviewConfig", "PreviewPlan", "plan_preview"]
 
 _BIG_M = 50.0  # big-M of the patch constraints [m]; larger than any course
+#: Ranges of a distance a leg spans and of a CoM speed (the fastest command is 1.5 m/s).
+_LEG, _LEG_REASON = "(0, 1] m", "1 m is past the legs' reach"
+_SPEED = "5 m/s is 3x the fastest command"
 
 
 @dataclass(frozen=True)
 class PreviewConfig:
     """Settings of :func:`plan_preview` (lengths in m, speeds in m/s)."""
 
-    n_steps: int = 6  # steps planned after the current one
-    stages_per_step: int = 5  # h', as the gait schedule
-    reach_m: float = 0.2  # |x_com - p_stance| at every stage boundary
-    reach_y_m: float = 0.2  # |y_com - p_stance,y| at every stage boundary
-    min_width_m: float = 0.08  # lateral distance of a foot from the other, on its own side
-    max_width_m: float = 0.35
-    width_m: float = 0.13  # nominal lateral distance of the feet (hips 0.13 m apart)
-    cop_m: float = 0.04  # |CoP - foot centre| (the line foot is +-0.075 m long)
-    max_advance_m: float = 0.35  # p_i+1 - p_i
+    n_steps: int = bounded(6, "[1, 20]", "an integer", "steps after the current one")
+    stages_per_step: int = bounded(5, "[1, 20]", "an integer", "h', as the gait schedule")
+    # |x_com - p_stance| and |y_com - p_stance,y| at every stage boundary
+    reach_m: float = bounded(0.2, _LEG, "a distance", _LEG_REASON)
+    reach_y_m: float = bounded(0.2, _LEG, "a distance", _LEG_REASON)
+    # lateral distance of a foot from the other, on its own side
+    min_width_m: float = bounded(0.08, "[0, 1] m", "a distance", _LEG_REASON)
+    max_width_m: float = bounded(0.35, _LEG, "a distance", _LEG_REASON)
+    # nominal lateral distance of the feet (hips 0.13 m apart)
+    width_m: float = bounded(0.13, "[0, 1] m", "a distance", _LEG_REASON)
+    # |CoP - foot centre| (the line foot is +-0.075 m long)
+    cop_m: float = bounded(0.04, "[0, 0.3] m", "a distance", "humanoid3d's toe: 0.075 m")
+    max_advance_m: float = bounded(0.35, _LEG, "a step", _LEG_REASON)  # p_i+1 - p_i
     # Mean horizontal speed of a swing foot: bounds p_i+1 - p_i-1 by this times the step
     # time (at 0.75 m/s a steady gait needs 1.5 m/s).
-    max_swing_speed_mps: float = 1.7
-    back_m: float = 0.0  # -(p_i+1 - p_i) allowed (no backward steps)
-    v_min_mps: float = 0.0
-    v_max_mps: float = 1.3
-    w_cop: float = 0.1  # weight of |u| against the mean-speed error of a step [1/s]
-    w_step: float = 0.01  # weight of the step-length deviation [1/s]
-    w_lateral: float = 0.1  # weight of |y_com - y_path| at step starts [1/s]
-    w_width: float = 0.01  # weight of the step-width deviation from width_m [1/s]
-    w_soft: float = 100.0  # weight of a violated reach or width bound [1/s per m]
-    time_limit_s: float = 2.0
+    max_swing_speed_mps: float = bounded(1.7, "(0, 10] m/s", "a speed", "1.5 m/s at 0.75 m/s")
+    # -(p_i+1 - p_i) allowed (0: no backward steps)
+    back_m: float = bounded(0.0, "[0, 1] m", "a step", _LEG_REASON)
+    v_min_mps: float = bounded(0.0, "[0, 5] m/s", "a speed", _SPEED)
+    v_max_mps: float = bounded(1.3, "(0, 5] m/s", "a speed", _SPEED)
+    w_cop: float = weight(0.1)  # weight of |u| against the mean-speed error of a step [1/s]
+    w_step: float = weight(0.01)  # weight of the step-length deviation [1/s]
+    w_lateral: float = weight(0.1)  # weight of |y_com - y_path| at step starts [1/s]
+    w_width: float = weight(0.01)  # weight of the step-width deviation from width_m [1/s]
+    # weight of a violated reach or width bound [1/s per m]
+    w_soft: float = bounded(100.0, "(0, 1e9]", "a weight", "> 0, or a violation is free")
+    time_limit_s: float = bounded(2.0, "(0, 60] s", "a time limit", "of one MILP solve")
     every_solve: bool = True  # re-plan at every MPC solve (else at step starts only)
     # Lateral margin of a foot centre inside a patch (the x margin is the controller's):
     # the line foot is 2 cm wide.
-    foothold_margin_y_m: float = 0.03
+    foothold_margin_y_m: float = bounded(
+        0.03, "[0, 0.1] m", "a margin", "under half the narrowest built-in stone, 0.20 m"
+    )
 
     def __post_init__(self) -> None:
         for name in ("n_steps", "stages_per_step"):
             value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise ConfigError(name, value, "an integer >= 1")
-        positive = ("reach_m", "reach_y_m", "max_advance_m", "max_swing_speed_mps",
-                    "max_width_m", "v_max_mps", "w_soft", "time_limit_s")  # fmt: skip
-        for name in positive:
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigError(name, value, "a finite number > 0")
-        non_negative = ("cop_m", "back_m", "v_min_mps", "min_width_m", "width_m", "w_cop",
-                        "w_step", "w_lateral", "w_width", "foothold_margin_y_m")  # fmt: skip
-        for name in non_negative:
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ConfigError(name, value, "a finite number >= 0")
+            if not isinstance(value, int):
+                raise ConfigError(name, value, "an integer")
+        check_ranges(self)
         if self.v_min_mps >= self.v_max_mps:
             raise ConfigError("v_min_mps", self.v_min_mps, f"< v_max_mps = {self.v_max_mps}")
+        if self.min_width_m > self.max_width_m:
+            raise ConfigError(
+                "min_width_m", self.min_width_m, f"<= max_width_m = {self.max_width_m}"
+            )
 
 
 @dataclass(frozen=True)

@@ -8,13 +8,12 @@ on the seed and ``i``, so the horizon can look ahead at the next steps' duration
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from gaitnet_mpc.dt_policy import NOMINAL_DT_S
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.config import SEED_INTERVAL, SEED_REASON, bounded, check_ranges
+from gaitnet_mpc.dt_policy import ACCEPTED_DT_INTERVAL, ACCEPTED_DT_REASON, NOMINAL_DT_S
 
 
 @dataclass(frozen=True)
@@ -30,19 +29,15 @@ class StepDurations:
         seed: seed of the draws.
     """
 
-    dt_s: float = NOMINAL_DT_S
-    duration_range_s: tuple[float, float] | None = None
-    stages_per_step: int = 5
-    seed: int = 0
+    dt_s: float = bounded(NOMINAL_DT_S, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON)
+    duration_range_s: tuple[float, float] | None = bounded(
+        None, "(0, 4] s", "a step duration", "20 stages of 0.2 s at most", ordered=True
+    )
+    stages_per_step: int = bounded(5, "[1, 20]", "an integer", "stages of a step; h' = 5")
+    seed: int = bounded(0, SEED_INTERVAL, "a seed", SEED_REASON)
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.dt_s) and self.dt_s > 0.0):
-            raise ConfigError("dt_s", self.dt_s, "a sampling time > 0 s")
-        r = self.duration_range_s
-        if r is not None and not (len(r) == 2 and 0.0 < r[0] <= r[1] and math.isfinite(r[1])):
-            raise ConfigError("duration_range_s", r, "(min, max) with 0 < min <= max [s]")
-        if self.stages_per_step < 1:
-            raise ConfigError("stages_per_step", self.stages_per_step, "an integer >= 1")
+        check_ranges(self)
 
     def dt_of_step(self, step_index: int) -> float:
         """MPC sampling time [s] of step ``step_index`` (0 = the first step)."""

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.quintic import PiecewiseQuintic, quintic_coeffs
 
@@ -51,6 +52,8 @@ __all__ = ["SwingConfig", "SwingTrajectory", "min_jerk", "obstacle_array", "swin
 _N_CHECK = 401
 #: Tolerance [m] of the clearance check.
 _CLEAR_TOL_M = 1e-9
+#: Range of a swing height above the higher end [m]: the humanoid's hip is 0.42 m high.
+_HEIGHT, _HEIGHT_REASON = "[0, 0.4] m", "the humanoid's hip is 0.42 m high"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -121,25 +124,19 @@ class SwingConfig:
             touchdown) [-].
     """
 
-    apex_height_m: float = 0.06
-    clearance_m: float = 0.02
-    foot_half_length_m: float = 0.0
-    touchdown_speed_mps: float = 0.0
-    max_apex_rise_m: float = 0.30
-    max_lift_fraction: float = 0.25
+    apex_height_m: float = bounded(0.06, _HEIGHT, "a height", _HEIGHT_REASON)
+    clearance_m: float = bounded(
+        0.02, "[0, 0.3] m", "a margin", "0.3 m is above the humanoid's knee"
+    )
+    foot_half_length_m: float = bounded(0.0, "[0, 0.3] m", "a length", "humanoid3d: 0.075 m")
+    touchdown_speed_mps: float = bounded(0.0, "[0, 2] m/s", "a speed", "2 m/s: a 0.2 m drop")
+    max_apex_rise_m: float = bounded(0.30, _HEIGHT, "a height", _HEIGHT_REASON)
+    max_lift_fraction: float = bounded(
+        0.25, "[0, 0.4]", "a fraction", "at each end; 0.4 leaves 20 %"
+    )
 
     def __post_init__(self) -> None:
-        for name in (
-            "apex_height_m",
-            "clearance_m",
-            "foot_half_length_m",
-            "touchdown_speed_mps",
-            "max_apex_rise_m",
-        ):
-            _scalar(getattr(self, name), name, 0.0, "a finite value >= 0")
-        frac = _scalar(self.max_lift_fraction, "max_lift_fraction", 0.0, "a fraction in [0, 0.4]")
-        if frac > 0.4:
-            raise ConfigError("max_lift_fraction", self.max_lift_fraction, "a fraction in [0, 0.4]")
+        check_ranges(self)
         if self.max_apex_rise_m < self.apex_height_m:
             raise ConfigError("max_apex_rise_m", self.max_apex_rise_m, ">= apex_height_m")
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitnet_mpc.errors import reraise_interrupt
 from gaitnet_mpc.gaitnet.data import load_dataset
 from gaitnet_mpc.gaitnet.fit import FitReport, fit, write_fit
 from gaitnet_mpc.gaitnet.model import GaitNet
@@ -53,7 +54,8 @@ def _torch_single_call(result: TrainResult):  # type: ignore[no-untyped-def]
     """The ensemble in PyTorch, called on one vector (None: no torch)."""
     try:
         import torch
-    except ImportError:
+    except ImportError as exc:
+        reraise_interrupt(exc)
         return None
     w = result.weights
     nets = torch_members(w)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.errors import ConfigError, reraise_interrupt
 from gaitnet_mpc.gaitnet.model import GaitNetWeights
 
 #: Most ensemble members (the paper's ensemble is 5; 100 is a training of hours).
@@ -82,7 +82,8 @@ class TrainResult:
 def _import_torch():  # type: ignore[no-untyped-def]
     try:
         import torch
-    except ImportError:
+    except ImportError as exc:
+        reraise_interrupt(exc)
         raise ConfigError(
             "training", "PyTorch missing", "pip install 'gaitnet-mpc[train]' (torch==2.13.0)"
         ) from None

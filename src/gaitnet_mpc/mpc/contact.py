@@ -15,18 +15,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 
 INF = np.inf
+_MU = "> 0 to walk; 2 is past rubber on concrete (about 1)"
+_FZ_MAX = "2000 N is 13 times the 16 kg humanoid's weight"
 
 
 @dataclass(frozen=True)
 class ContactParams:
     """Contact model shared by all controllers (paper Table VIII)."""
 
-    mu: float = 0.7
-    fz_min_n: float = 10.0
-    fz_max_n: float = 500.0
+    mu: float = bounded(0.7, "(0, 2]", "a friction coefficient", _MU)
+    fz_min_n: float = bounded(10.0, "[0, 2000] N", "a normal force", "a foot cannot pull")
+    fz_max_n: float = bounded(500.0, "(0, 2000] N", "a normal force", _FZ_MAX)
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+        if self.fz_min_n > self.fz_max_n:
+            raise ConfigError("fz_min_n", self.fz_min_n, f"<= fz_max_n = {self.fz_max_n} N")
 
     @property
     def mu_box(self) -> float:

@@ -30,9 +30,11 @@ from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.config import bounded, check_ranges, weight
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.geometry import GRAVITY_MPS2
 from gaitnet_mpc.mpc.contact import ContactParams
+from gaitnet_mpc.mpc.qp.registry import BACKENDS
 
 #: Backend settings applied under ``KDConfig.qp_options``. PIQP's relative duality-gap test
 #: is measured against the large state-tracking terms of eq. 18 (objective ~1e5), which
@@ -42,16 +44,13 @@ BACKEND_OPTIONS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {"piqp": MappingProxyType({"eps_duality_gap_rel": 1e-12, "eps_duality_gap_abs": 1e-10})}
 )
 
-
-def _positive(name: str, value: float) -> None:
-    if not (np.isfinite(value) and value > 0.0):
-        raise ConfigError(name, value, "a finite float > 0")
+_FOOT = "the CoP's reach from the foot centre; 0: a point foot; humanoid3d 0.075 m"
+_TRUST = "per axis about the iterate; None: off; 1 m is past any step"
 
 
-def _weights(name: str, value: tuple[float, ...], size: int) -> None:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (size,) or not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
-        raise ConfigError(name, value, f"{size} finite non-negative floats")
+def _size(name: str, value: tuple[float, ...], size: int) -> None:
+    if np.shape(value) != (size,):
+        raise ConfigError(name, value, f"{size} weights, one per axis")
 
 
 @dataclass(frozen=True)
@@ -67,52 +66,50 @@ class KDConfig:
     every free foot-position group to its reference (mean over the group's stance stages)
     unless foothold bounds give it a finite height range. ``qp_options`` are passed to
     :func:`~gaitnet_mpc.mpc.qp.make_workspace` (over :data:`BACKEND_OPTIONS`).
+
+    ``mass_kg``: pass ``RobotModel.total_mass_kg``; the walking controller
+    (``KDWalkController``) overwrites it, ``toe_m``, ``heel_m`` and
+    ``min_foot_separation_m`` with the robot's.
     """
 
-    horizon: int = 10
-    mass_kg: float = 16.0  # humanoid3d total mass; pass RobotModel.total_mass_kg
-    gravity_mps2: float = GRAVITY_MPS2
-    w_momentum: tuple[float, ...] = (10.0,) * 6  # L^h
-    w_pose: tuple[float, ...] = (200.0,) * 6  # L^H
-    w_p_foot: tuple[float, float, float] = (0.1, 0.1, 0.1)  # L^{p_f}
-    w_p_com: tuple[float, float, float] = (100.0, 100.0, 250.0)  # L^{p_c}
-    w_force: float = 1e-4  # L^f
-    w_moment: float = 1e-3  # L^tau
-    reg_force: float = 1e-6
-    reg_moment: float = 1e-5
-    reg_position: float = 1e-2
+    horizon: int = bounded(10, "[1, 100]", "an integer", "stages; h = 10 in the paper")
+    mass_kg: float = bounded(16.0, "(0, 1000] kg", "a mass", "humanoid3d 16 kg, biped2d 10 kg")
+    gravity_mps2: float = bounded(
+        GRAVITY_MPS2, "[0, 30] m/s^2", "an acceleration", "0: none; 30 is past Jupiter's 25"
+    )
+    w_momentum: tuple[float, ...] = weight((10.0,) * 6)  # L^h
+    w_pose: tuple[float, ...] = weight((200.0,) * 6)  # L^H
+    w_p_foot: tuple[float, float, float] = weight((0.1, 0.1, 0.1))  # L^{p_f}
+    w_p_com: tuple[float, float, float] = weight((100.0, 100.0, 250.0))  # L^{p_c}
+    w_force: float = weight(1e-4)  # L^f
+    w_moment: float = weight(1e-3)  # L^tau
+    reg_force: float = weight(1e-6)
+    reg_moment: float = weight(1e-5)
+    reg_position: float = weight(1e-2)
     contact: ContactParams = field(default_factory=ContactParams)
-    toe_m: float = 0.075
-    heel_m: float = 0.075
+    toe_m: float = bounded(0.075, "[0, 0.3] m", "a length", _FOOT)
+    heel_m: float = bounded(0.075, "[0, 0.3] m", "a length", _FOOT)
     foot_height_from_reference: bool = True
     #: Smallest lateral distance [m] between the feet in the stance foot's heading frame
     #: (:mod:`~gaitnet_mpc.mpc.implicit_kd`); None: no such row (the paper has none).
-    min_foot_separation_m: float | None = None
-    trust_region_m: float | None = 0.1
-    trust_region_com_m: float | None = None
+    min_foot_separation_m: float | None = bounded(
+        None, "(0, 0.5] m", "a distance", "humanoid3d 0.06 m; 0.5 m is past the legs' reach"
+    )
+    trust_region_m: float | None = bounded(0.1, "(0, 1] m", "a distance", _TRUST)
+    trust_region_com_m: float | None = bounded(None, "(0, 1] m", "a distance", _TRUST)
     qp_backend: str = "piqp"  # fastest here, see the module docstring
     qp_options: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
-        if not isinstance(self.horizon, int | np.integer) or self.horizon < 1:
-            raise ConfigError("horizon", self.horizon, "an integer >= 1")
-        _positive("mass_kg", self.mass_kg)
-        if not (np.isfinite(self.gravity_mps2) and self.gravity_mps2 >= 0.0):
-            raise ConfigError("gravity_mps2", self.gravity_mps2, "a finite float >= 0")
-        _weights("w_momentum", self.w_momentum, 6)
-        _weights("w_pose", self.w_pose, 6)
-        _weights("w_p_foot", self.w_p_foot, 3)
-        _weights("w_p_com", self.w_p_com, 3)
-        for name in ("w_force", "w_moment", "reg_force", "reg_moment", "reg_position"):
-            _weights(name, (getattr(self, name),), 1)
-        for name in ("toe_m", "heel_m"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0.0):
-                raise ConfigError(name, value, "a finite float >= 0 (0 for a point foot)")
-        for name in ("trust_region_m", "trust_region_com_m", "min_foot_separation_m"):
-            value = getattr(self, name)
-            if value is not None:
-                _positive(name, value)
+        if not isinstance(self.horizon, int | np.integer):
+            raise ConfigError("horizon", self.horizon, "an integer")
+        check_ranges(self)
+        _size("w_momentum", self.w_momentum, 6)
+        _size("w_pose", self.w_pose, 6)
+        _size("w_p_foot", self.w_p_foot, 3)
+        _size("w_p_com", self.w_p_com, 3)
+        if self.qp_backend not in BACKENDS:
+            raise ConfigError("qp_backend", self.qp_backend, f"one of {sorted(BACKENDS)}")
 
     def qp_workspace_options(self) -> dict[str, Any]:
         """Options of :func:`~gaitnet_mpc.mpc.qp.make_workspace`: :data:`BACKEND_OPTIONS`

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.geometry import GRAVITY_MPS2
 from gaitnet_mpc.mpc.centroidal_model import N_FEET
@@ -22,11 +23,17 @@ from gaitnet_mpc.mpc.qp import QPSolution
 
 @dataclass(frozen=True)
 class KDTolerances:
-    """Convergence tolerances of the sequential CMPC (paper Table X)."""
+    """Convergence tolerances of the sequential CMPC (paper Table X): a search direction at
+    or below each counts as converged (0: only an exact zero, so up to ``j_max`` QPs)."""
 
-    position_m: float = 1e-5
-    force_n: float = 1e-2
-    moment_nm: float = 1e-3
+    position_m: float = bounded(
+        1e-5, "[0, 0.01] m", "a tolerance", "1 cm: twice the 5 mm landing margin"
+    )
+    force_n: float = bounded(1e-2, "[0, 10] N", "a tolerance", "6 % of the humanoid's weight")
+    moment_nm: float = bounded(1e-3, "[0, 1] N m", "a tolerance", "moves m g's CoP by 6 mm")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
 
 @dataclass(frozen=True)

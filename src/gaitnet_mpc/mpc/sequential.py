@@ -29,7 +29,13 @@ from typing import Protocol
 import numpy as np
 
 from gaitnet_mpc.command import Command
-from gaitnet_mpc.dt_policy import ACCEPTED_DT_RANGE_S, NOMINAL_DT_S, check_bounds
+from gaitnet_mpc.config import bounded, check_ranges
+from gaitnet_mpc.dt_policy import (
+    ACCEPTED_DT_INTERVAL,
+    ACCEPTED_DT_RANGE_S,
+    ACCEPTED_DT_REASON,
+    NOMINAL_DT_S,
+)
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import centroidal_map_euler, euler_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
@@ -183,22 +189,24 @@ class ScheduledDt:
 class SequentialConfig:
     """Settings of the sequential loop (paper Table X)."""
 
-    j_max: int = 50
+    j_max: int = bounded(50, "[1, 1000]", "an integer", "iterations; Table X: 50")
     tolerances: KDTolerances = field(default_factory=KDTolerances)
     kd: KDConfig = field(default_factory=KDConfig)
     update_foot_reference: bool = True  # Alg. 1 line 9 re-makes p_f_ref from the iterate
     linear_reference_from_command: bool = True
     # The dt policy's output is clipped into these bounds [s] (GaitScheduleConfig's), and a
     # change smaller than ``dt_tolerance_s`` is not applied (the references stay as they are).
-    dt_bounds_s: tuple[float, float] = ACCEPTED_DT_RANGE_S
-    dt_tolerance_s: float = 1e-4
+    dt_bounds_s: tuple[float, float] = bounded(
+        ACCEPTED_DT_RANGE_S, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON, True
+    )
+    dt_tolerance_s: float = bounded(
+        1e-4, "[0, 0.01] s", "a dt change", "a coarser one drops most changes within 0.045-0.07 s"
+    )
 
     def __post_init__(self) -> None:
-        if not isinstance(self.j_max, int) or self.j_max < 1:
-            raise ConfigError("j_max", self.j_max, "an integer >= 1")
-        check_bounds("dt_bounds_s", self.dt_bounds_s)
-        if not (math.isfinite(self.dt_tolerance_s) and self.dt_tolerance_s >= 0.0):
-            raise ConfigError("dt_tolerance_s", self.dt_tolerance_s, "a finite time >= 0 s")
+        if not isinstance(self.j_max, int):
+            raise ConfigError("j_max", self.j_max, "an integer")
+        check_ranges(self)
 
 
 @dataclass

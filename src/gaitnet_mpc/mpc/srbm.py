@@ -28,10 +28,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gaitnet_mpc.config import bounded, check_ranges, weight
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.geometry import GRAVITY_MPS2, skew
 from gaitnet_mpc.mpc.contact import ContactParams, foot_wrench_constraints
-from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, make_workspace
+from gaitnet_mpc.mpc.qp import BACKENDS, QPProblem, QPSolution, make_workspace
 from gaitnet_mpc.robots import FEET
 
 NX = 13  # [Theta (3), p (3), omega (3), v (3), 1]
@@ -46,19 +47,19 @@ TorqueLimits = tuple[int, np.ndarray, np.ndarray, np.ndarray]
 class SRBMConfig:
     """Weights and limits of the SRBM MPC (units per field)."""
 
-    horizon: int = 10
-    w_rpy: tuple[float, float, float] = (300.0, 300.0, 100.0)
+    horizon: int = bounded(10, "[1, 100]", "an integer", "stages; two steps of h' = 5")
+    w_rpy: tuple[float, float, float] = weight((300.0, 300.0, 100.0))
     # CoM position and velocity weights are (forward, lateral, vertical) in the heading
     # frame of each stage (the reference yaw). The lateral ones are small on purpose: a
     # line foot cannot exert a moment about its long axis, so the MPC can only change the
     # lateral CoM velocity by rolling the trunk (hip strategy). Tracking vy = 0 strongly
     # fights the natural step-to-step sway and leaves a lean of ~0.025 rad with a steady
     # sideways drift of ~0.06 m/s; the lateral CoM is governed by the footholds instead.
-    w_pos_m: tuple[float, float, float] = (50.0, 1.0, 500.0)
-    w_omega: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    w_vel: tuple[float, float, float] = (20.0, 0.5, 10.0)
-    w_force: float = 1e-4  # paper Table VIII, L^f
-    w_moment: float = 1e-3  # paper Table VIII, L^tau
+    w_pos_m: tuple[float, float, float] = weight((50.0, 1.0, 500.0))
+    w_omega: tuple[float, float, float] = weight((1.0, 1.0, 1.0))
+    w_vel: tuple[float, float, float] = weight((20.0, 0.5, 10.0))
+    w_force: float = weight(1e-4)  # paper Table VIII, L^f
+    w_moment: float = weight(1e-3)  # paper Table VIII, L^tau
     # Regularise the wrench about the gravity-compensating one (m g shared by the stance
     # feet of a stage) instead of about zero. Penalising |f|^2 itself pulls the planned
     # vertical force below m g, which the receding horizon turns into a steady sag of the
@@ -68,8 +69,9 @@ class SRBMConfig:
     qp_backend: str = "daqp"
 
     def __post_init__(self) -> None:
-        if self.horizon < 1:
-            raise ConfigError("horizon", self.horizon, "an integer >= 1")
+        check_ranges(self)
+        if self.qp_backend not in BACKENDS:
+            raise ConfigError("qp_backend", self.qp_backend, f"one of {sorted(BACKENDS)}")
 
 
 @dataclass(frozen=True)

@@ -166,6 +166,24 @@ class RunFolder:
         return self.path / PLOTS_DIR
 
 
+#: Largest ``summary.json`` / ``timing.json`` read [bytes]: a 1 h run's summary (a
+#: foothold per step) is about 1 MB.
+MAX_JSON_BYTES = 64 << 20
+
+
+def _read_json(path: Path) -> Any:
+    """A run's JSON file; a named error if it is too big, not UTF-8, not JSON or too deep."""
+    size = path.stat().st_size
+    if size > MAX_JSON_BYTES:
+        raise ConfigError(str(path), f"{size} bytes", f"at most {MAX_JSON_BYTES} bytes")
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ConfigError(str(path), "invalid JSON", f"valid UTF-8 JSON ({exc})") from None
+    except RecursionError:
+        raise ConfigError(str(path), "JSON nested too deep", "a run's JSON file") from None
+
+
 def load_run(path: str | Path) -> RunFolder:
     """Load a run folder; raises :class:`ConfigError` naming the missing or bad file."""
     root = Path(path)
@@ -175,18 +193,12 @@ def load_run(path: str | Path) -> RunFolder:
     for name in (SUMMARY, LOG):
         if not (root / name).is_file():
             raise ConfigError("RUN_DIR", str(path), f"{expected}; {name} is missing")
-    try:
-        summary = json.loads((root / SUMMARY).read_text())
-    except json.JSONDecodeError as exc:
-        raise ConfigError(str(root / SUMMARY), "invalid JSON", f"valid JSON ({exc})") from exc
+    summary = _read_json(root / SUMMARY)
     if not isinstance(summary, dict):
         raise ConfigError(str(root / SUMMARY), type(summary).__name__, "a JSON object")
     check_summary(summary, root / SUMMARY)
     if (root / TIMING).is_file():
-        try:
-            timing = json.loads((root / TIMING).read_text())
-        except json.JSONDecodeError as exc:
-            raise ConfigError(str(root / TIMING), "invalid JSON", f"valid JSON ({exc})") from exc
+        timing = _read_json(root / TIMING)
         if isinstance(timing, dict):
             summary = merge_timing(summary, timing)
     log = read_csv_columns(root / LOG)

@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 import scipy.sparse as sp
 
+from gaitnet_mpc.errors import reraise_interrupt
 from gaitnet_mpc.mpc.qp.problem import QPProblem
 from gaitnet_mpc.mpc.qp.structure import canonical_csc, triu_csc
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
@@ -28,6 +29,7 @@ from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 try:
     import clarabel
 except ImportError as _exc:  # pragma: no cover - depends on the environment
+    reraise_interrupt(_exc)
     clarabel = None
     _IMPORT_ERROR: str | None = repr(_exc)
 else:

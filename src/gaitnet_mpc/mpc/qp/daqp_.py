@@ -36,12 +36,14 @@ from typing import Any, ClassVar
 import numpy as np
 import scipy.sparse as sp
 
+from gaitnet_mpc.errors import reraise_interrupt
 from gaitnet_mpc.mpc.qp.problem import QPProblem
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 
 try:
     import daqp
 except ImportError as _exc:  # pragma: no cover - depends on the environment
+    reraise_interrupt(_exc)
     daqp = None
     _IMPORT_ERROR: str | None = repr(_exc)
 else:

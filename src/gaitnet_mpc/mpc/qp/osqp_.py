@@ -19,6 +19,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from gaitnet_mpc.errors import reraise_interrupt
 from gaitnet_mpc.mpc.qp.problem import QPProblem
 from gaitnet_mpc.mpc.qp.structure import SparsityPattern, triu_csc
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
@@ -27,6 +28,7 @@ try:
     import osqp
     from osqp.interface import SolverStatus as _OSQPStatus
 except ImportError as _exc:  # pragma: no cover - depends on the environment
+    reraise_interrupt(_exc)
     osqp = None
     _IMPORT_ERROR: str | None = repr(_exc)
 else:

@@ -28,7 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.errors import ConfigError, reraise_interrupt
 from gaitnet_mpc.mpc.qp.problem import QPProblem
 from gaitnet_mpc.mpc.qp.structure import SparsityPattern
 from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
@@ -36,6 +36,7 @@ from gaitnet_mpc.mpc.qp.workspace import BackendResult, QPWorkspace
 try:
     import casadi
 except ImportError as _exc:  # pragma: no cover - depends on the environment
+    reraise_interrupt(_exc)
     casadi = None  # type: ignore[assignment]  # None marks the missing optional module
     _IMPORT_ERROR: str | None = repr(_exc)
 else:

@@ -18,8 +18,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gaitnet_mpc.command import Command
+from gaitnet_mpc.config import bounded, check_ranges, weight
+from gaitnet_mpc.dt_policy import ACCEPTED_DT_INTERVAL, ACCEPTED_DT_REASON
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots.spec import FEET
+
+_MU = "> 0 to walk; 2 is past rubber on concrete (about 1)"
+_FZ_MAX = "2000 N is 13 times the 16 kg humanoid's weight"
 
 
 @dataclass(frozen=True)
@@ -30,54 +35,50 @@ class WBWeights:
     omega_x, omega_y, omega_z]``.
     """
 
-    q_base: tuple[float, ...] = (100.0, 100.0, 100.0, 150.0, 150.0, 250.0)  # Q1^{q_fb}
-    q_joint: float = 50.0  # Q1^{q_f,i}, every joint
-    tau_joint: float = 1e-3  # Q2
-    force: float = 1e-4  # Q3^f, per force component
-    moment: float = 1e-3  # Q3^tau, per foot moment component
-    v_base: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0, 5.0)  # Q4^{q_fb}
-    v_joint: float = 1.0  # Q4^{q_f,i}
+    q_base: tuple[float, ...] = weight((100.0, 100.0, 100.0, 150.0, 150.0, 250.0))  # Q1^{q_fb}
+    q_joint: float = weight(50.0)  # Q1^{q_f,i}, every joint
+    tau_joint: float = weight(1e-3)  # Q2
+    force: float = weight(1e-4)  # Q3^f, per force component
+    moment: float = weight(1e-3)  # Q3^tau, per foot moment component
+    v_base: tuple[float, ...] = weight((1.0, 1.0, 1.0, 1.0, 1.0, 5.0))  # Q4^{q_fb}
+    v_joint: float = weight(1.0)  # Q4^{q_f,i}
     # The last node's state cost is scaled by this (beyond Table VI, which has no terminal
     # weight): without it the plan lets the robot sink and fall back at the horizon end,
     # where a fall costs little.
-    terminal_scale: float = 1.0
+    terminal_scale: float = bounded(1.0, "[0, 1000]", "a scale", "wbmpc runs with 10")
 
     def __post_init__(self) -> None:
+        check_ranges(self)
         for name in ("q_base", "v_base"):
             value = getattr(self, name)
-            if len(value) != 6 or min(value) < 0.0:
-                raise ConfigError(f"weights.{name}", value, "6 non-negative numbers")
-        for name in ("q_joint", "tau_joint", "force", "moment", "v_joint", "terminal_scale"):
-            if getattr(self, name) < 0.0:
-                raise ConfigError(f"weights.{name}", getattr(self, name), "a value >= 0")
+            if len(value) != 6:
+                raise ConfigError(name, value, "6 weights, one per base coordinate")
 
 
 @dataclass(frozen=True)
 class WBConfig:
     """Fixed settings of the whole-body NMPC (Table VI)."""
 
-    horizon_stages: int = 10  # h
-    stages_per_step: int = 5  # h'
-    friction_coef: float = 0.7  # mu
-    f_min_n: float = 10.0  # minimum normal force of a stance foot [N]
-    f_max_n: float = 500.0  # maximum normal force of a stance foot [N]
+    horizon_stages: int = bounded(10, "[1, 100]", "an integer", "stages; h = 10 in Table VI")
+    stages_per_step: int = bounded(5, "[1, 20]", "an integer", "stages of a step; h' = 5")
+    friction_coef: float = bounded(0.7, "(0, 2]", "a friction coefficient", _MU)  # mu
+    # minimum and maximum normal force of a stance foot [N]
+    f_min_n: float = bounded(10.0, "[0, 2000] N", "a normal force", "a foot cannot pull")
+    f_max_n: float = bounded(500.0, "(0, 2000] N", "a normal force", _FZ_MAX)
     # Not in Table VI: apex of the swing-foot height lower bound [m] (3c, clearance).
-    swing_clearance_m: float = 0.04
+    swing_clearance_m: float = bounded(
+        0.04, "[0, 0.3] m", "a height", "0.3 m is above the humanoid's knee, 0.22 m high"
+    )
     # Accepted per-step sampling times [s]; Table VI uses 0.045-0.07 s.
-    dt_min_s: float = 0.03
-    dt_max_s: float = 0.08
+    dt_min_s: float = bounded(0.03, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON)
+    dt_max_s: float = bounded(0.08, ACCEPTED_DT_INTERVAL, "a sampling time", ACCEPTED_DT_REASON)
     weights: WBWeights = field(default_factory=WBWeights)
 
     def __post_init__(self) -> None:
-        if self.horizon_stages < 1:
-            raise ConfigError("horizon_stages", self.horizon_stages, "an integer >= 1")
-        if self.stages_per_step < 1:
-            raise ConfigError("stages_per_step", self.stages_per_step, "an integer >= 1")
-        if not 0.0 < self.friction_coef:
-            raise ConfigError("friction_coef", self.friction_coef, "a value > 0")
-        if not 0.0 <= self.f_min_n < self.f_max_n:
+        check_ranges(self)
+        if not self.f_min_n < self.f_max_n:
             raise ConfigError("f_min_n/f_max_n", (self.f_min_n, self.f_max_n), "0 <= min < max")
-        if not 0.0 < self.dt_min_s <= self.dt_max_s:
+        if not self.dt_min_s <= self.dt_max_s:
             raise ConfigError("dt_min_s/dt_max_s", (self.dt_min_s, self.dt_max_s), "0 < min <= max")
 
 
