@@ -80,19 +80,27 @@ class PartialFailure(GaitNetMPCError):
         return (type(self), (self.what, self.failed, self.log))
 
 
-def reraise_interrupt(exc: BaseException) -> None:
-    """Raise :class:`KeyboardInterrupt` if ``exc`` was caused by one.
+def caused_by_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, a :class:`KeyboardInterrupt`.
 
     A Ctrl-C or SIGTERM that arrives while a compiled extension initialises (``import
-    piqp``) reaches Python as ``ImportError('initialization failed')`` with the
-    interrupt as its cause. Code that treats an ImportError as "not installed" calls this
-    first, so that an interrupted start-up stops (exit 130) instead of reporting a
-    missing package.
+    piqp``) reaches Python as ``ImportError('initialization failed')`` with the interrupt
+    as its cause.
     """
     seen: set[int] = set()
     cause: BaseException | None = exc
     while cause is not None and id(cause) not in seen:
         if isinstance(cause, KeyboardInterrupt):
-            raise KeyboardInterrupt from exc
+            return True
         seen.add(id(cause))
         cause = cause.__cause__ or cause.__context__
+    return False
+
+
+def reraise_interrupt(exc: BaseException) -> None:
+    """Raise :class:`KeyboardInterrupt` if ``exc`` was caused by one
+    (:func:`caused_by_interrupt`). Code that treats an ImportError as "not installed"
+    calls this first, so that an interrupted start-up stops (exit 130) instead of
+    reporting a missing package."""
+    if caused_by_interrupt(exc):
+        raise KeyboardInterrupt from exc

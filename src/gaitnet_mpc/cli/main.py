@@ -20,7 +20,7 @@ import os
 import sys
 from types import ModuleType
 
-from gaitnet_mpc.errors import GaitNetMPCError, PartialFailure
+from gaitnet_mpc.errors import GaitNetMPCError, PartialFailure, caused_by_interrupt
 
 #: The sub-commands, in the order ``--help`` lists them: name -> module of ``cli/``.
 COMMANDS = ("run", "plot", "compare", "collect", "train", "reproduce", "bench", "dataset")
@@ -89,7 +89,10 @@ def main(argv: list[str] | None = None) -> int:
         # what a command had finished is already on disk (every file is written atomically)
         print("gaitnet-mpc: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except Exception:
+    except Exception as exc:
+        if caused_by_interrupt(exc):  # an import that a signal cut short
+            print("gaitnet-mpc: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
         import traceback
 
         traceback.print_exc()
@@ -100,5 +103,22 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def entry() -> None:
+    """The ``gaitnet-mpc`` executable: :func:`main`, then exit with its code.
+
+    After an interrupt the process ends with :func:`os._exit` (streams flushed; every
+    file was written and every lock released before :func:`main` returned): an interrupt
+    that cut short an extension's start-up inside CPython's ``PyRun_*`` leaves the
+    interpreter flagged to kill itself with SIGINT at exit, which would replace exit
+    code 130 by -2.
+    """
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

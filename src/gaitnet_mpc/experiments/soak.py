@@ -90,7 +90,7 @@ LONG_PUSH_COUNT_PROBABILITIES = (0.0, 0.4, 0.35, 0.25)  # 1, 2 or 3 pushes
 #: How each controller handles a failed solve (for the report).
 FAILURE_HANDLING = {
     "kd": "QPSolveError caught in KDWalkController._solve: the last good plan is kept",
-    "gaitnet": "as kd (GaitNetWalkController is a KDWalkController)",
+    "gaitnet": "as kd (the same KDWalkController, with the Gait-Net dt policy)",
     "srbm": "QPSolveError caught in SRBMWalkController: the last good wrench is kept",
     "wbmpc": "an unsuccessful NLP solve is not a fallback: its iterate is used as the plan",
     "stand": "no MPC",
