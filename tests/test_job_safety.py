@@ -387,3 +387,21 @@ def test_an_import_error_caused_by_an_interrupt_stops_as_an_interrupt() -> None:
         with pytest.raises(KeyboardInterrupt):
             reraise_interrupt(exc)
     reraise_interrupt(ImportError("No module named 'piqp'"))  # a real absence: no raise
+
+
+def test_an_interrupt_before_the_first_logged_tick_still_writes_the_run(tmp_path: Path) -> None:
+    """Ctrl-C during the first controller call (a slow first solve under load): the run
+    folder says interrupted after 0 s, instead of an IndexError on an empty log."""
+    from gaitnet_mpc.scenario import build_episode, make_scenario, run_scenario
+
+    scenario = make_scenario(robot="biped2d", controller="stand", duration_s=1.0)
+    episode = build_episode(scenario)
+
+    def interrupted(state: object) -> None:
+        raise KeyboardInterrupt
+
+    episode.controller.compute = interrupted  # type: ignore[method-assign]
+    summary = run_scenario(scenario, tmp_path, video=None, progress=False, episode=episode)
+    assert summary["interrupted"] and summary["outcome"] == "interrupted"
+    assert summary["duration_s"] == 0.0
+    assert json.loads((tmp_path / "summary.json").read_text())["interrupted"] is True

@@ -13,6 +13,9 @@ from gaitnet_mpc.errors import ConfigError
 
 SUMMARY = "time the closed loop: solves, low-level tick, real-time factor, memory"
 
+#: Imported before the command starts, with Ctrl-C held back (cli/main.py).
+PRELOAD = ("gaitnet_mpc.scenario", "gaitnet_mpc.mpc.qp")
+
 
 def add_parser(sub: Any) -> None:
     b = sub.add_parser(

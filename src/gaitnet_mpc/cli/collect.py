@@ -9,6 +9,9 @@ from typing import Any
 
 SUMMARY = "collect the Gait-Net data set (paper Sec. IV-A-1); re-run to resume"
 
+#: Imported before the command starts, with Ctrl-C held back (cli/main.py).
+PRELOAD = ("gaitnet_mpc.scenario", "gaitnet_mpc.mpc.qp")
+
 
 def add_parser(sub: Any) -> None:
     from gaitnet_mpc.dataset.protocol import TEACHERS, CollectProtocol

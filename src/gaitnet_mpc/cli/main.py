@@ -16,14 +16,28 @@ Exit codes (:data:`EXIT_CODES`, listed in ``--help`` and the README):
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib
 import os
+import signal
 import sys
+from collections.abc import Iterator
 from types import ModuleType
 
 from gaitnet_mpc.errors import GaitNetMPCError, PartialFailure, caused_by_interrupt
 
 #: The sub-commands, in the order ``--help`` lists them: name -> module of ``cli/``.
-COMMANDS = ("run", "plot", "compare", "collect", "train", "reproduce", "bench", "dataset")
+COMMANDS = (
+    "run",
+    "plot",
+    "compare",
+    "collect",
+    "train",
+    "reproduce",
+    "bench",
+    "dataset",
+    "sweep",
+)
 
 EXIT_OK, EXIT_FELL, EXIT_BAD_INPUT, EXIT_PART_FAILED, EXIT_INTERNAL = 0, 1, 2, 3, 4
 EXIT_INTERRUPTED = 130
@@ -39,8 +53,6 @@ EXIT_CODES: dict[int, str] = {
 
 
 def _module(name: str) -> ModuleType:
-    import importlib
-
     return importlib.import_module(f"gaitnet_mpc.cli.{name}")
 
 
@@ -66,6 +78,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back while the block runs; deliver them after it.
+
+    The block imports the sub-commands and what they need (MuJoCo, Pinocchio, the QP
+    solvers). A signal that lands inside a compiled extension's initialisation comes out
+    as some other error of that extension (``ImportError('initialization failed')``,
+    ``ctypes.ArgumentError``), or leaves CPython flagged to kill itself; held back, it is
+    delivered when the imports are done and stops the command as a plain Ctrl-C.
+    """
+    held = {signal.SIGINT, signal.SIGTERM}
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one sub-command; return its exit code (:data:`EXIT_CODES`)."""
     from gaitnet_mpc.parallel import stop_signals_as_keyboard_interrupt
@@ -76,9 +106,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # SIGTERM stops every command as Ctrl-C does, from start-up through its last write
         with stop_signals_as_keyboard_interrupt():
-            args = build_parser().parse_args(argv)
+            with _signals_deferred():
+                args = build_parser().parse_args(argv)
+                command = _module(args.cmd)
+                for name in getattr(command, "PRELOAD", ()):
+                    importlib.import_module(name)
             args.argv = argv
-            return int(_module(args.cmd).main(args))
+            return int(command.main(args))
     except PartialFailure as exc:
         print(f"gaitnet-mpc: {exc}", file=sys.stderr)
         return EXIT_PART_FAILED

@@ -63,6 +63,9 @@ SCENARIO_DEFAULTS: dict[str, Any] = {
 
 SUMMARY = "simulate one episode and write a run folder"
 
+#: Imported before the command starts, with Ctrl-C held back (cli/main.py).
+PRELOAD = ("gaitnet_mpc.scenario", "gaitnet_mpc.mpc.qp")
+
 
 def add_parser(sub: Any) -> None:
     from gaitnet_mpc.control.registry import CONTROLLERS

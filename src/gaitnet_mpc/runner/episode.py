@@ -352,7 +352,8 @@ def _summarise(
     ``self_collision_first_t_s`` (null if none), ``self_collision_max_depth_m`` and
     ``self_collision_pairs`` (sorted ``"bodyA/bodyB"``) describe them.
     """
-    rows = np.asarray(log.rows)
+    # (n, columns) even for n = 0: a run interrupted before its first tick was logged
+    rows = np.asarray(log.rows, dtype=float).reshape(len(log.rows), len(log.columns))
     t = rows[:, 0]
     sim_s = float(sim.time_s)
     after_1s = t >= 1.0

@@ -1,0 +1,428 @@
+"""The cases of ``gaitnet-mpc sweep`` and the worker that runs one: what each mode measures.
+
+A case is a JSON-ready dict (``key``, ``mode``, ``controller`` and the mode's fields); the
+worker :func:`run_case` runs it (one bisection, or one episode) and returns its record.
+Every episode is a scenario (:func:`~gaitnet_mpc.scenario.make_scenario`,
+:func:`~gaitnet_mpc.scenario.build_episode`, :func:`~gaitnet_mpc.runner.episode.run_episode`;
+no run folder), as ``gaitnet-mpc run`` would run it.
+
+Modes (:data:`MODES`), humanoid3d throughout:
+
+* ``push``: the largest survivable push of :data:`PUSH_DURATION_S` at the trunk CoM per
+  controller x direction (:data:`DIRECTIONS`, 8) x phase of a step x speed, by bisection
+  on the force (:func:`bisect_largest`). The push starts at ``k T + p T``: ``T = 5 dt`` the
+  nominal step (the controller's fixed dt, or the nominal 0.045 s), ``k T`` the first step
+  start at or after the settling time, ``p`` the phase. Survived: no fall within the time
+  after the push.
+* ``protocol``: one episode per controller x seed under the data-collection protocol's
+  pushes (:func:`~gaitnet_mpc.sim.disturbances.protocol_pushes`).
+* ``payload``: the largest unknown trunk payload [kg] walked for the whole episode, per
+  controller x course (``flat``, ``gap``), by bisection.
+* ``terrain``: one episode per controller x course x seed: seeded ``uneven`` courses of
+  growing amplitude (written into the sweep folder as course files, since a scenario
+  names a course and a seed only) and seeded ``stepping-stones``. Success: no fall, no
+  foothold violation, no leg-leg contact.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+MODES = ("push", "protocol", "payload", "terrain")
+
+PUSH_DURATION_S = 0.2
+#: direction name -> angle of the push in the world xy plane [deg] (x forward, y left)
+DIRECTIONS: dict[str, float] = {
+    "fwd": 0.0,
+    "fwd-left": 45.0,
+    "left": 90.0,
+    "bwd-left": 135.0,
+    "bwd": 180.0,
+    "bwd-right": 225.0,
+    "right": 270.0,
+    "fwd-right": 315.0,
+}
+#: The stages of a footstep of every walking controller at start (``T = 5 dt``).
+STAGES_PER_STEP = 5
+
+
+@dataclass(frozen=True)
+class ModePlan:
+    """The grid of one mode (full or ``--quick``); part of a sweep's identity.
+
+    Attributes:
+        speeds_mps: forward speed commands [m/s].
+        directions: push directions (``push``), names of :data:`DIRECTIONS`.
+        phases: push start phases in a step, in [0, 1) (``push``).
+        settle_s: time before the first push [s] (``push``, ``protocol``).
+        after_s: simulated time after the push ends [s] (``push``).
+        duration_s: episode duration [s] (``protocol``, ``payload``, ``terrain``).
+        hi: top of the bisected range (N for ``push``, kg for ``payload``).
+        resolution: bisection grid step (same unit as ``hi``).
+        spot_fractions: fractions of the found bound re-run as checks of monotonicity.
+        courses: courses (``payload``: built-in names; ``terrain``: ``uneven`` amplitudes
+            as ``uneven:<amplitude m>`` and ``stepping-stones``).
+        seeds: seeds (``protocol``: push draws; ``terrain``: course layouts).
+    """
+
+    speeds_mps: tuple[float, ...] = (0.5,)
+    directions: tuple[str, ...] = ()
+    phases: tuple[float, ...] = ()
+    settle_s: float = 0.0
+    after_s: float = 0.0
+    duration_s: float = 0.0
+    hi: float = 0.0
+    resolution: float = 1.0
+    spot_fractions: tuple[float, ...] = ()
+    courses: tuple[str, ...] = ()
+    seeds: tuple[int, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ModePlan:
+        values: dict[str, Any] = {
+            k: tuple(v) if isinstance(v, list) else v for k, v in data.items()
+        }
+        return cls(**values)
+
+
+UNEVEN_AMPLITUDES_M = (0.01, 0.02, 0.03, 0.04, 0.05, 0.06)
+
+
+def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
+    """The grid of ``mode``; ``seeds`` seeds for ``protocol`` and ``terrain``."""
+    seed_list = tuple(range(1 if quick else seeds))
+    if mode == "push":
+        if quick:
+            return ModePlan((0.5,), ("fwd", "left"), (0.25,), 0.5, 0.6, hi=200.0, resolution=100.0)
+        return ModePlan(
+            (0.25, 0.5, 0.75),
+            tuple(DIRECTIONS),
+            (0.0, 0.25, 0.5, 0.75),
+            settle_s=3.0,
+            after_s=3.0,
+            hi=500.0,
+            resolution=5.0,
+            spot_fractions=(0.5, 0.25),
+        )
+    if mode == "protocol":
+        settle_s, duration_s = (0.5, 2.0) if quick else (2.0, 12.0)
+        return ModePlan((0.5,), settle_s=settle_s, duration_s=duration_s, seeds=seed_list)
+    if mode == "payload":
+        if quick:
+            return ModePlan((0.5,), duration_s=1.5, hi=4.0, resolution=2.0, courses=("flat",))
+        return ModePlan(
+            (0.5,),
+            duration_s=20.0,
+            hi=8.0,
+            resolution=0.25,
+            spot_fractions=(0.5,),
+            courses=("flat", "gap"),
+        )
+    if mode == "terrain":
+        amplitudes = (0.02,) if quick else UNEVEN_AMPLITUDES_M
+        courses = (*(f"uneven:{a:g}" for a in amplitudes), "stepping-stones")
+        duration_s = 2.0 if quick else 14.0
+        return ModePlan((0.5,), duration_s=duration_s, courses=courses, seeds=seed_list)
+    from gaitnet_mpc.errors import ConfigError
+
+    raise ConfigError("MODE", mode, f"one of {list(MODES)}")
+
+
+def parse_controller(spec: str) -> tuple[str, float | None]:
+    """``kd@0.055`` -> (``kd``, 0.055): a registry name and an optional fixed dt [s]."""
+    from gaitnet_mpc.errors import ConfigError
+
+    name, sep, dt = spec.partition("@")
+    if not sep:
+        return name, None
+    try:
+        value = float(dt)
+    except ValueError:
+        raise ConfigError("--controllers", spec, "NAME or NAME@DT with DT a number [s]") from None
+    return name, value
+
+
+def make_cases(mode: str, controllers: tuple[str, ...], plan: ModePlan) -> list[dict[str, Any]]:
+    """Every case of the sweep, each with a unique ``key``."""
+    cases: list[dict[str, Any]] = []
+    for c in controllers:
+        if mode == "push":
+            for v in plan.speeds_mps:
+                for p in plan.phases:
+                    for d in plan.directions:
+                        key = f"{c} v{v:g} {d} p{p:g}"
+                        cases.append({"key": key, "speed_mps": v, "direction": d, "phase": p})
+        elif mode == "payload":
+            cases += [{"key": f"{c} {course}", "course": course} for course in plan.courses]
+        elif mode == "protocol":
+            cases += [{"key": f"{c} seed {s}", "seed": s} for s in plan.seeds]
+        else:
+            for course in plan.courses:
+                for s in plan.seeds:
+                    cases.append({"key": f"{c} {course} seed {s}", "course": course, "seed": s})
+        for case in cases:
+            case.setdefault("controller", c)
+    for case in cases:
+        case["mode"] = mode
+        case["plan"] = plan.to_dict()
+    return cases
+
+
+# ----------------------------------------------------------------------------- bisection
+@dataclass
+class Bisection:
+    """A bisection's outcome on the grid ``i * resolution``, ``i`` in ``[0, n]``.
+
+    Attributes:
+        survived: the largest grid index found survivable (None: index 0 fell).
+        failed: the smallest failing index above it (None: the top survived).
+        spot_failed: indices below ``survived`` that were run as checks and fell.
+        probes: every index run, in order, with whether it was survived.
+    """
+
+    survived: int | None
+    failed: int | None
+    spot_failed: list[int] = field(default_factory=list)
+    probes: list[tuple[int, bool]] = field(default_factory=list)
+
+    @property
+    def non_monotone(self) -> bool:
+        return bool(self.spot_failed)
+
+
+def bisect_largest(
+    survives: Callable[[int], bool], n: int, spot_fractions: tuple[float, ...] = ()
+) -> Bisection:
+    """The largest ``i`` in ``[0, n]`` with ``survives(i)``, assuming monotonicity (every
+    smaller index survives too); each index is run at most once, the ends only when the
+    bisection reaches them. ``spot_fractions`` (e.g. 0.5: half the found bound) are then
+    run as checks of that assumption: one that falls makes the result non-monotone."""
+    seen: dict[int, bool] = {}
+    probes: list[tuple[int, bool]] = []
+
+    def ok(i: int) -> bool:
+        if i not in seen:
+            seen[i] = bool(survives(i))
+            probes.append((i, seen[i]))
+        return seen[i]
+
+    lo, hi = 0, n  # lo: survived (or assumed), hi: failed (or assumed)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    failed: int | None = hi
+    if hi == n and ok(n):  # the top of the range is run only if reached
+        lo, failed = n, None
+    if lo == 0 and not ok(0):
+        return Bisection(None, 0, [], probes)
+    spot_failed = []
+    for frac in spot_fractions:
+        i = math.floor(lo * frac)
+        if 0 < i < lo and not ok(i):
+            spot_failed.append(i)
+    return Bisection(lo, failed, sorted(set(spot_failed)), probes)
+
+
+# ----------------------------------------------------------------------------- episodes
+def _episode(
+    controller: str,
+    *,
+    vx_mps: float,
+    duration_s: float,
+    pushes: tuple[Any, ...] = (),
+    payload_kg: float = 0.0,
+    course: str = "flat",
+    course_seed: int | None = None,
+) -> tuple[dict[str, Any], Any]:
+    """One episode; returns (its outcome, its controller). An exception in the closed loop
+    propagates (the sweep logs it as a failed case)."""
+    from gaitnet_mpc.runner.episode import run_episode
+    from gaitnet_mpc.scenario import build_episode, make_scenario
+
+    name, dt_s = parse_controller(controller)
+    scenario = make_scenario(
+        controller=name,
+        course=course,
+        course_seed=course_seed,
+        vx_mps=vx_mps,
+        duration_s=duration_s,
+        pushes=pushes,
+        payload_kg=payload_kg,
+        dt_s=dt_s,
+    )
+    episode = build_episode(scenario)
+    t0 = time.perf_counter()
+    summary = run_episode(
+        episode.sim, episode.controller, scenario.command, duration_s, progress=False
+    )
+    fall_time = summary.get("fall_time_s")
+    return {
+        "fell": bool(summary["fell"]),
+        "fall_time_s": None if fall_time is None else round(float(fall_time), 3),
+        "fall_reason": summary.get("fall_reason") or "",
+        "distance_m": round(float(summary.get("distance_m") or 0.0), 3),
+        "foothold_violations": int(summary.get("foothold_violations") or 0),
+        "self_collisions": int(summary.get("self_collisions") or 0),
+        "wall_s": round(time.perf_counter() - t0, 2),
+    }, episode.controller
+
+
+def step_s(controller: str) -> float:
+    """The nominal step duration of ``controller`` at start: 5 dt [s]."""
+    from gaitnet_mpc.dt_policy import NOMINAL_DT_S
+
+    dt = parse_controller(controller)[1]
+    return STAGES_PER_STEP * (NOMINAL_DT_S if dt is None else dt)
+
+
+def push_time_s(controller: str, settle_s: float, phase: float) -> float:
+    """``k T + p T``: ``k T`` the first step start at or after ``settle_s``."""
+    t_step = step_s(controller)
+    return math.ceil(settle_s / t_step - 1e-9) * t_step + phase * t_step
+
+
+def _measured_phase(controller: Any, t_s: float) -> tuple[float | None, str]:
+    """Where in its executed step the push started (phase, swing foot), from the gait log."""
+    from gaitnet_mpc.control.walking_base import WalkingBase
+
+    if not isinstance(controller, WalkingBase):
+        return None, ""
+    sched = controller.schedule
+    for s in sched.step_log:
+        if s.start_time_s - 1e-9 <= t_s < s.start_time_s + s.duration_s - 1e-9:
+            return round((t_s - s.start_time_s) / s.duration_s, 3), s.swing_foot
+    if sched.step_start_time_s <= t_s:  # the episode ended inside that step
+        frac = (t_s - sched.step_start_time_s) / sched.current_step_duration_s
+        return round(frac, 3), sched.swing_foot
+    return None, ""
+
+
+def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
+    from gaitnet_mpc.sim.disturbances import Push
+
+    c = case["controller"]
+    t_push = push_time_s(c, plan.settle_s, case["phase"])
+    angle = math.radians(DIRECTIONS[case["direction"]])
+    episodes: list[dict[str, Any]] = []
+    measured: list[tuple[float | None, str]] = []
+
+    def survives(i: int) -> bool:
+        f = i * plan.resolution
+        fx, fy = round(f * math.cos(angle), 6), round(f * math.sin(angle), 6)
+        pushes = (Push(t_push, (fx, fy, 0.0), PUSH_DURATION_S),) if f > 0 else ()
+        duration = t_push + PUSH_DURATION_S + plan.after_s
+        out, ctrl = _episode(c, vx_mps=case["speed_mps"], duration_s=duration, pushes=pushes)
+        if not measured:
+            measured.append(_measured_phase(ctrl, t_push))
+        episodes.append({"force_n": f, **out})
+        return not out["fell"]
+
+    b = bisect_largest(survives, round(plan.hi / plan.resolution), plan.spot_fractions)
+    phase_measured, swing = measured[0] if measured else (None, "")
+    return {
+        **_bounds(b, plan.resolution),
+        "push_t_s": round(t_push, 4),
+        "phase_measured": phase_measured,
+        "swing_foot": swing,
+        "episodes": episodes,
+    }
+
+
+def _bounds(b: Bisection, res: float) -> dict[str, Any]:
+    return {
+        "survived": None if b.survived is None else b.survived * res,
+        "failed": None if b.failed is None else b.failed * res,
+        "non_monotone": b.non_monotone,
+        "spot_failed": [i * res for i in b.spot_failed],
+    }
+
+
+def _payload_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
+    episodes: list[dict[str, Any]] = []
+
+    def survives(i: int) -> bool:
+        kg = i * plan.resolution
+        out, _ = _episode(
+            case["controller"],
+            vx_mps=plan.speeds_mps[0],
+            duration_s=plan.duration_s,
+            payload_kg=kg,
+            course=case["course"],
+        )
+        episodes.append({"payload_kg": kg, **out})
+        return not out["fell"]
+
+    b = bisect_largest(survives, round(plan.hi / plan.resolution), plan.spot_fractions)
+    return {**_bounds(b, plan.resolution), "episodes": episodes}
+
+
+def uneven_file_name(course: str, seed: int) -> str:
+    """The course file of ``uneven:<amplitude>`` and ``seed`` in the sweep folder."""
+    amplitude_cm = round(float(course.split(":", 1)[1]) * 100, 3)
+    return f"courses/uneven-{amplitude_cm:g}cm-seed{seed}.json"
+
+
+def _terrain_case(case: dict[str, Any], plan: ModePlan, folder: str) -> dict[str, Any]:
+    course, seed = case["course"], case["seed"]
+    if course.startswith("uneven:"):
+        kwargs: dict[str, Any] = {"course": os.path.join(folder, uneven_file_name(course, seed))}
+    else:
+        kwargs = {"course": course, "course_seed": seed}
+    out, _ = _episode(
+        case["controller"], vx_mps=plan.speeds_mps[0], duration_s=plan.duration_s, **kwargs
+    )
+    clean = not out["fell"] and not out["foothold_violations"] and not out["self_collisions"]
+    return {"success": clean, **out}
+
+
+def _protocol_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
+    from gaitnet_mpc.sim.disturbances import protocol_pushes
+
+    pushes = protocol_pushes(case["seed"], plan.settle_s, plan.duration_s)
+    out, _ = _episode(
+        case["controller"],
+        vx_mps=plan.speeds_mps[0],
+        duration_s=plan.duration_s,
+        pushes=pushes,
+    )
+    t_end = out["fall_time_s"] if out["fell"] else plan.duration_s
+    return {"survived": not out["fell"], "pushes": sum(p.t_s < t_end for p in pushes), **out}
+
+
+def run_case(item: tuple[dict[str, Any], str]) -> dict[str, Any]:
+    """Worker body: run one case (``item``: the case and the sweep folder); return its
+    record (``key``, ``case``, ``result``, ``wall_s``). Exceptions propagate."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    case, folder = item
+    plan = ModePlan.from_dict(case["plan"])
+    t0 = time.perf_counter()
+    mode = case["mode"]
+    if mode == "push":
+        result = _push_case(case, plan)
+    elif mode == "payload":
+        result = _payload_case(case, plan)
+    elif mode == "protocol":
+        result = _protocol_case(case, plan)
+    else:
+        result = _terrain_case(case, plan, folder)
+    case_out = {k: v for k, v in case.items() if k != "plan"}
+    return {
+        "key": case["key"],
+        "case": case_out,
+        "result": result,
+        "wall_s": round(time.perf_counter() - t0, 2),
+    }

@@ -1,0 +1,170 @@
+"""``gaitnet-mpc sweep``: the bisection on fake survival functions, the case grids, bad
+input refused before any work, and ``--quick`` push and protocol sweeps end to end
+(files, resuming, the polar plot)."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from gaitnet_mpc.cli import main
+from gaitnet_mpc.experiments.sweep_cases import (
+    DIRECTIONS,
+    bisect_largest,
+    make_cases,
+    mode_plan,
+)
+
+
+# ----------------------------------------------------------------------------- bisection
+def test_bisection_finds_the_bound_of_a_monotone_function() -> None:
+    calls: list[int] = []
+
+    def survives(i: int) -> bool:
+        calls.append(i)
+        return i <= 37
+
+    b = bisect_largest(survives, 100, spot_fractions=(0.5, 0.25))
+    assert (b.survived, b.failed) == (37, 38)
+    assert not b.non_monotone and b.spot_failed == []
+    assert len(calls) == len(set(calls)) <= 10  # each index once: log2(100) + spot checks
+    assert 0 not in calls and 100 not in calls  # the ends only when reached
+
+
+def test_bisection_ends_of_the_range() -> None:
+    top = bisect_largest(lambda i: True, 8)
+    assert (top.survived, top.failed) == (8, None)
+    assert top.probes[-1] == (8, True)
+    zero = bisect_largest(lambda i: False, 8, spot_fractions=(0.5,))
+    assert (zero.survived, zero.failed) == (None, 0)
+    assert zero.probes[-1] == (0, False) and not zero.non_monotone
+
+
+def test_bisection_spot_checks_report_non_monotonicity() -> None:
+    def survives(i: int) -> bool:  # a hole of falls below the bound
+        return i <= 60 and not 25 <= i <= 35
+
+    b = bisect_largest(survives, 100, spot_fractions=(0.5, 0.25))
+    assert b.survived is not None and b.survived >= 36
+    assert b.non_monotone and b.spot_failed and all(25 <= i <= 35 for i in b.spot_failed)
+    # without spot checks the bisection cannot see the hole
+    assert not bisect_largest(survives, 100).non_monotone
+
+
+def test_full_push_grid() -> None:
+    plan = mode_plan("push", quick=False, seeds=10)
+    assert len(plan.directions) == 8 and set(plan.directions) == set(DIRECTIONS)
+    assert len(plan.phases) >= 4 and plan.speeds_mps == (0.25, 0.5, 0.75)
+    cases = make_cases("push", ("gaitnet", "kd@0.055", "srbm"), plan)
+    assert len({c["key"] for c in cases}) == len(cases) == 3 * 8 * len(plan.phases) * 3
+    assert round(plan.hi / plan.resolution) == 100  # 0..500 N at 5 N
+
+
+def test_terrain_courses_are_written_with_their_amplitude(tmp_path: Path) -> None:
+    from gaitnet_mpc.experiments.sweep import SweepSettings, _write_courses
+    from gaitnet_mpc.experiments.sweep_cases import uneven_file_name
+    from gaitnet_mpc.terrain import load_course
+
+    settings = SweepSettings("terrain", ("srbm",), quick=False, seeds=2)
+    _write_courses(tmp_path, settings)
+    path = tmp_path / uneven_file_name("uneven:0.06", 1)
+    course = load_course(str(path))
+    tops = [p.z_top_m for p in course.patches]
+    assert 0.03 < max(abs(z) for z in tops) <= 0.06
+    assert len(list((tmp_path / "courses").glob("*.json"))) == 6 * 2
+
+
+# ----------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["push", "--controllers", "atlas"], "--controllers: got 'atlas'"),
+        (["push", "--controllers", "kd@fast"], "--controllers: got 'kd@fast'"),
+        (["push", "--controllers", "kd@5"], "--controllers: got 'kd@5'"),
+        (["push", "--workers", "0"], "--workers: got 0"),
+        (["protocol", "--seeds", "0"], "--seeds: got 0"),
+    ],
+)
+def test_bad_input_is_refused_before_any_work(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "sw"
+    assert main(["sweep", *args, "--quick", "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_unknown_mode_and_file_out_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", "jump", "--out", str(tmp_path / "x")])
+    assert exc.value.code == 2
+    assert "invalid choice: 'jump'" in capsys.readouterr().err
+    file = tmp_path / "file.txt"
+    file.write_text("x")
+    assert main(["sweep", "push", "--quick", "--out", str(file)]) == 2
+    assert "--out: got" in capsys.readouterr().err and file.read_text() == "x"
+
+
+# ----------------------------------------------------------------------------- end to end
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_quick_push_sweep_end_to_end_and_resume(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "push"
+    argv = ["sweep", "push", "--quick", "--workers", "2", "--out", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert err.count("[1/2]") == 1 and err.count("[2/2]") == 1  # one line per case
+    for name in ("cases.jsonl", "sweep.csv", "sweep.md", "status.json", "push_polar.png"):
+        assert (out / name).is_file(), name
+    assert (out / "push_polar.png").read_bytes()[:4] == b"\x89PNG"
+    lines = (out / "cases.jsonl").read_text().splitlines()
+    records = [json.loads(line) for line in lines[1:]]
+    rows = _rows(out / "sweep.csv")
+    assert len(rows) == len(records) == 2
+    assert {r["direction"] for r in rows} == {"fwd", "left"}
+    assert sum(int(r["episodes"]) for r in rows) == sum(
+        len(r["result"]["episodes"]) for r in records
+    )
+    for row in rows:
+        assert row["controller"] == "srbm" and row["phase_measured"] == "0.25"
+        if row["survived_n"]:
+            assert float(row["survived_impulse_ns"]) == pytest.approx(
+                0.2 * float(row["survived_n"])
+            )
+    status = json.loads((out / "status.json").read_text())
+    assert status["state"] == "done" and len(status["done"]) == 2 and status["todo"] == []
+    assert "gaitnet-mpc sweep push" in (out / "sweep.md").read_text()
+
+    # the same command again: no new work, the same cases
+    assert main(argv) == 0
+    assert "nothing to do" in capsys.readouterr().err
+    assert (out / "cases.jsonl").read_text().splitlines() == lines
+    assert len(_rows(out / "sweep.csv")) == 2
+
+    # another sweep's settings in this folder: refused before any work
+    other = ["sweep", "protocol", "--quick", "--out", str(out)]
+    assert main(other) == 2
+    assert "a folder of the same sweep settings" in capsys.readouterr().err
+    assert (out / "cases.jsonl").read_text().splitlines() == lines
+
+
+def test_quick_protocol_sweep_end_to_end(tmp_path: Path) -> None:
+    out = tmp_path / "protocol"
+    argv = ["sweep", "protocol", "--quick", "--no-progress", "--workers", "1", "--out", str(out)]
+    assert main(argv) == 0
+    rows = _rows(out / "sweep.csv")
+    assert len(rows) == 1 and rows[0]["seed"] == "0" and int(rows[0]["pushes"]) >= 1
+    text = (out / "sweep.md").read_text()
+    assert "| srbm |" in text and "CPU:" in text and "Wall time" in text
+    assert json.loads((out / "status.json").read_text())["state"] == "done"
+    assert not (out / "push_polar.png").exists()
