@@ -86,6 +86,11 @@ def test_terrain_courses_are_written_with_their_amplitude(tmp_path: Path) -> Non
         (["push", "--controllers", "kd@5"], "--controllers: got 'kd@5'"),
         (["push", "--workers", "0"], "--workers: got 0"),
         (["protocol", "--seeds", "0"], "--seeds: got 0"),
+        (["push", "--directions", "up"], "--directions: got ('up',)"),
+        (["push", "--phases", "1.0"], "--phases: got (1.0,)"),
+        (["push", "--speeds", "x"], "--speeds: got 'x'"),
+        (["push", "--speeds", "nan"], "--speeds: got 'nan'"),
+        (["protocol", "--directions", "fwd"], "expected the push mode"),
     ],
 )
 def test_bad_input_is_refused_before_any_work(
@@ -95,6 +100,18 @@ def test_bad_input_is_refused_before_any_work(
     assert main(["sweep", *args, "--quick", "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_part_of_the_push_grid() -> None:
+    from gaitnet_mpc.experiments.sweep import SweepSettings
+
+    settings = SweepSettings(
+        "push", ("srbm",), speeds_mps=(0.5,), directions=("fwd",), phases=(0.0,)
+    )
+    plan = settings.plan
+    assert (plan.speeds_mps, plan.directions, plan.phases) == ((0.5,), ("fwd",), (0.0,))
+    assert plan.hi == 500.0  # the rest of the full grid's settings
+    assert settings.to_dict() != SweepSettings("push", ("srbm",)).to_dict()  # its identity
 
 
 def test_unknown_mode_and_file_out_are_refused(

@@ -4,6 +4,7 @@ terrain) on a process pool or Ray, resumable."""
 from __future__ import annotations
 
 import argparse
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -52,6 +53,22 @@ def add_parser(sub: Any) -> None:
     )
     s.add_argument("--backend", choices=BACKENDS, default="process", help="default: %(default)s")
     s.add_argument("--address", default=None, help="Ray cluster address (--backend ray)")
+    s.add_argument(
+        "--speeds", default=None, metavar="V,...", help="forward speeds [m/s] (default: all)"
+    )
+    s.add_argument(
+        "--directions",
+        default=None,
+        metavar="NAME,...",
+        help="push: directions among fwd, fwd-left, left, bwd-left, bwd, bwd-right, right, "
+        "fwd-right (default: all 8)",
+    )
+    s.add_argument(
+        "--phases",
+        default=None,
+        metavar="P,...",
+        help="push: push start as fractions of a step in [0, 1) (default: 0, 0.25, 0.5, 0.75)",
+    )
     s.add_argument("--quick", action="store_true", help="a tiny sweep (the test suite's)")
     s.add_argument("--no-progress", action="store_true", help="no line per finished case")
 
@@ -77,8 +94,35 @@ def main(args: argparse.Namespace) -> int:
         address=args.address,
         progress=not args.no_progress,
     )
-    settings = SweepSettings(args.mode, controllers, args.quick, args.seeds)
+    settings = SweepSettings(
+        args.mode,
+        controllers,
+        args.quick,
+        args.seeds,
+        speeds_mps=_numbers(args.speeds, "--speeds"),
+        directions=None if args.directions is None else _names(args.directions),
+        phases=_numbers(args.phases, "--phases"),
+    )
     command_line = shlex.join(["gaitnet-mpc", *args.argv])
     records = sweep(settings, args.out, options, command_line)
     print(f"{args.out}: {len(records)} case(s); see {args.out / 'sweep.md'}")
     return 0
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(t.strip() for t in text.split(",") if t.strip())
+
+
+def _numbers(text: str | None, option: str) -> tuple[float, ...] | None:
+    """``"0.25,0.5"`` -> (0.25, 0.5); a named error for anything but numbers."""
+    from gaitnet_mpc.errors import ConfigError
+
+    if text is None:
+        return None
+    try:
+        values = tuple(float(t) for t in _names(text))
+    except ValueError:
+        raise ConfigError(option, text, "comma-separated numbers") from None
+    if not all(math.isfinite(v) for v in values):
+        raise ConfigError(option, text, "finite numbers")
+    return values

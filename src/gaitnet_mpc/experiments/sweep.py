@@ -30,13 +30,14 @@ import sys
 import time
 from collections.abc import Callable, Generator
 from contextlib import closing
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from gaitnet_mpc.errors import ConfigError, GaitNetMPCError, PartialFailure
 from gaitnet_mpc.experiments.collect import CollectOptions
 from gaitnet_mpc.experiments.sweep_cases import (
+    DIRECTIONS,
     MODES,
     ModePlan,
     make_cases,
@@ -72,12 +73,18 @@ class SweepSettings:
         controllers: registry names, ``NAME@DT`` for a fixed MPC dt [s] (``kd@0.055``).
         quick: the tiny grid of the test suite.
         seeds: seeds of ``protocol`` and ``terrain``.
+        speeds_mps, directions, phases: a part of the grid (None: the mode's whole grid);
+            directions are names of :data:`~.sweep_cases.DIRECTIONS` (``push``), phases
+            fractions of a step in [0, 1) (``push``), speeds in [0, 1.5] m/s.
     """
 
     mode: str
     controllers: tuple[str, ...] = DEFAULT_CONTROLLERS
     quick: bool = False
     seeds: int = DEFAULT_SEEDS
+    speeds_mps: tuple[float, ...] | None = None
+    directions: tuple[str, ...] | None = None
+    phases: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         from gaitnet_mpc.control.registry import CONTROLLERS
@@ -96,10 +103,29 @@ class SweepSettings:
                 raise ConfigError("--controllers", spec, "@DT only for a fixed-dt controller")
         if isinstance(self.seeds, bool) or not (isinstance(self.seeds, int) and self.seeds >= 1):
             raise ConfigError("--seeds", self.seeds, "an integer >= 1")
+        if self.speeds_mps is not None and not (
+            self.speeds_mps and all(0.0 <= v <= 1.5 for v in self.speeds_mps)
+        ):
+            raise ConfigError("--speeds", self.speeds_mps, "speeds in [0, 1.5] m/s")
+        if self.directions is not None and not (
+            self.directions and set(self.directions) <= set(DIRECTIONS)
+        ):
+            raise ConfigError("--directions", self.directions, f"names among {list(DIRECTIONS)}")
+        if self.phases is not None and not (self.phases and all(0 <= p < 1 for p in self.phases)):
+            raise ConfigError("--phases", self.phases, "fractions of a step in [0, 1)")
+        if self.mode != "push" and (self.directions is not None or self.phases is not None):
+            raise ConfigError("--directions / --phases", self.mode, "the push mode")
 
     @property
     def plan(self) -> ModePlan:
-        return mode_plan(self.mode, self.quick, self.seeds)
+        plan = mode_plan(self.mode, self.quick, self.seeds)
+        if self.speeds_mps is not None:
+            plan = replace(plan, speeds_mps=self.speeds_mps)
+        if self.directions is not None:
+            plan = replace(plan, directions=self.directions)
+        if self.phases is not None:
+            plan = replace(plan, phases=self.phases)
+        return plan
 
     def to_dict(self) -> dict[str, Any]:
         return {
