@@ -46,7 +46,7 @@ from gaitnet_mpc.errors import ConfigError, GaitNetMPCError, PartialFailure
 from gaitnet_mpc.experiments.setrun import SetResult, run_set
 from gaitnet_mpc.experiments.teachers import teacher_config
 from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
-from gaitnet_mpc.results.io import write_bytes_atomic, write_json_atomic
+from gaitnet_mpc.results.io import append_failure, write_bytes_atomic, write_json_atomic
 from gaitnet_mpc.results.outdir import check_output_path, write_status
 
 BACKENDS = ("process", "ray")
@@ -324,7 +324,14 @@ def collect(
                         if isinstance(outcome.error, GaitNetMPCError):
                             raise outcome.error  # bad input the checks above did not see
                         failed[spec.index] = spec.name
-                        _log_failure(folder / ERRORS_LOG, spec, outcome)
+                        append_failure(
+                            folder / ERRORS_LOG,
+                            spec.name,
+                            "spec",
+                            spec.to_dict(),
+                            outcome.error,
+                            outcome.worker_died,
+                        )
                         status("running")
                         line = f"{spec.name}: FAILED ({type(outcome.error).__name__}: "
                         line += f"{str(outcome.error)[:200]}); see {folder / ERRORS_LOG}"
@@ -360,23 +367,6 @@ def collect(
             raise PartialFailure("collect", list(failed.values()), str(folder / ERRORS_LOG))
         status("done", 0)
         return manifest
-
-
-def _log_failure(path: Path, spec: SetSpec, outcome: Outcome[SetSpec, SetBytes]) -> None:
-    """Append a failed set, its spec and its traceback (the worker's, where it raised)."""
-    import traceback
-
-    assert outcome.error is not None
-    what = "its worker died" if outcome.worker_died else "its worker raised"
-    text = "".join(traceback.format_exception(outcome.error))
-    entry = (
-        f"=== {time.strftime('%Y-%m-%dT%H:%M:%S')} {spec.name}: {what}\n"
-        f"spec: {json.dumps(spec.to_dict())}\n{text}\n"
-    )
-    with path.open("a") as fh:
-        fh.write(entry)
-        fh.flush()
-        os.fsync(fh.fileno())
 
 
 def _set_line(spec: SetSpec, stats: dict[str, Any], wall_s: float, n: int, total: int) -> str:

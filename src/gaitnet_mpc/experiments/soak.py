@@ -455,15 +455,6 @@ def _read_records(path: Path, settings: DrawSettings) -> dict[int, dict[str, Any
     return records
 
 
-def _append(path: Path, item: dict[str, Any]) -> None:
-    """Append one JSON line and push it to disk."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("a") as fh:
-        fh.write(json.dumps(item, allow_nan=False) + "\n")
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
 # ----------------------------------------------------------------------------- report
 @dataclass
 class _Tally:
@@ -645,12 +636,12 @@ def soak(
 ) -> dict[int, dict[str, Any]]:
     """Run the episodes of ``settings`` not yet in the JSONL, write the report, return all
     finished episodes' records. Ctrl-C / SIGTERM stops early and still writes the report."""
-    from gaitnet_mpc.results.io import write_atomic
+    from gaitnet_mpc.results.io import append_json_line, write_atomic
 
     path = options.jsonl
     records = _read_records(path, settings)
     if not path.exists():
-        _append(path, {"soak_settings": settings.to_dict()})
+        append_json_line(path, {"soak_settings": settings.to_dict()})
     todo = [draw_episode(settings, i) for i in range(options.episodes) if i not in records]
     log(
         f"{len(todo)} of {options.episodes} episodes to run ({len(records)} already in {path}), "
@@ -662,7 +653,7 @@ def soak(
     try:
         with stop_signals_as_keyboard_interrupt():
             for n, record in enumerate(runs, 1):
-                _append(path, record)
+                append_json_line(path, record)
                 records[record["index"]] = record
                 log(_episode_line(record, n, len(todo)))
     except KeyboardInterrupt:

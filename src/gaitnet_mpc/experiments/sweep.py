@@ -25,7 +25,6 @@ Ctrl-C / SIGTERM stops the workers, writes the files of what was finished and re
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 from collections.abc import Callable, Generator
@@ -48,7 +47,7 @@ from gaitnet_mpc.experiments.sweep_cases import (
 )
 from gaitnet_mpc.experiments.sweep_report import csv_text, markdown, push_polar
 from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
-from gaitnet_mpc.results.io import write_atomic
+from gaitnet_mpc.results.io import append_failure, append_json_line, write_atomic
 from gaitnet_mpc.results.outdir import check_output_path, folder_lock, write_status
 
 CASES = "cases.jsonl"
@@ -153,14 +152,6 @@ def check_inputs(settings: SweepSettings, folder: Path) -> Path:
 
 
 # ----------------------------------------------------------------------------- storage
-def _append(path: Path, item: dict[str, Any]) -> None:
-    """Append one JSON line and push it to disk."""
-    with path.open("a") as fh:
-        fh.write(json.dumps(item, allow_nan=False) + "\n")
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
 def read_records(path: Path, settings: SweepSettings) -> dict[str, dict[str, Any]]:
     """The finished cases in ``path`` by key (a torn last line is ignored).
 
@@ -266,7 +257,7 @@ def sweep(
         path = folder / CASES
         records = read_records(path, settings)
         if not path.exists():
-            _append(path, {"sweep_settings": settings.to_dict()})
+            append_json_line(path, {"sweep_settings": settings.to_dict()})
         if settings.mode == "terrain":
             _write_courses(folder, settings)
         cases = make_cases(settings.mode, settings.controllers, settings.plan)
@@ -315,7 +306,15 @@ def sweep(
                         if isinstance(outcome.error, GaitNetMPCError):
                             raise outcome.error  # bad input the checks above did not see
                         failed.append(case["key"])
-                        _log_failure(folder / ERRORS_LOG, case, outcome)
+                        brief = {k: v for k, v in case.items() if k != "plan"}
+                        append_failure(
+                            folder / ERRORS_LOG,
+                            case["key"],
+                            "case",
+                            brief,
+                            outcome.error,
+                            outcome.worker_died,
+                        )
                         status("running")
                         log(
                             f"[{n}/{len(todo)}] {case['key']}: FAILED "
@@ -324,7 +323,7 @@ def sweep(
                         )
                         continue
                     record = outcome.get()
-                    _append(path, record)
+                    append_json_line(path, record)
                     records[record["key"]] = record
                     status("running")
                     if options.progress:
@@ -365,21 +364,3 @@ def case_line(r: dict[str, Any]) -> str:
     else:
         text = f"fell at {res['fall_time_s']:.2f} s" if res["fell"] else "not clean"
     return f"{r['key']}: {text}, {r['wall_s']:.1f} s wall"
-
-
-def _log_failure(path: Path, case: dict[str, Any], outcome: Outcome[Any, Any]) -> None:
-    """Append a failed case and its traceback (the worker's, where it raised)."""
-    import traceback
-
-    assert outcome.error is not None
-    what = "its worker died" if outcome.worker_died else "its worker raised"
-    text = "".join(traceback.format_exception(outcome.error))
-    brief = {k: v for k, v in case.items() if k != "plan"}
-    entry = (
-        f"=== {time.strftime('%Y-%m-%dT%H:%M:%S')} {case['key']}: {what}\n"
-        f"case: {json.dumps(brief)}\n{text}\n"
-    )
-    with path.open("a") as fh:
-        fh.write(entry)
-        fh.flush()
-        os.fsync(fh.fileno())
