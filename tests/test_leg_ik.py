@@ -108,19 +108,6 @@ def _samples(
     return {k: np.array(v) for k, v in out.items()}
 
 
-def _on_the_hanging_branch(
-    robot: RobotModel, data: pin.Data, foot: str, p_foot: np.ndarray
-) -> bool:
-    """Whether the foot lies below the hip roll joint in the roll link's frame: the branch
-    of eq. 38 the IK solves for ("the leg hanging down", module docstring of leg_ik). The
-    other root of the roll equation (the foot above the roll joint, e.g. hip pitch -1.8
-    rad with the hip roll and the trunk tilted to their limits, found by Hypothesis) is
-    another leg configuration with the same foot position; the IK does not return it.
-    Call after :func:`_foot_fk` (joint placements of the sample in ``data``)."""
-    roll = data.oMi[robot.pin_model.getJointId(robot.joint_names[robot.leg_joint_index[foot][1]])]
-    return float((roll.rotation.T @ (p_foot - roll.translation))[2]) < 0.0
-
-
 def _check_round_trip(
     robot: RobotModel, foot: str, s: dict[str, np.ndarray], q_leg: np.ndarray
 ) -> None:
@@ -220,8 +207,6 @@ def test_round_trip_property(
         return
     q_leg, q = sample
     p_foot, _ = _foot_fk(robot, data, foot, q)
-    if not _on_the_hanging_branch(robot, data, foot, p_foot):
-        return
     geom = leg_geometry(robot, foot)
     sol = leg_ik(geom, p_foot, p_base, rot_base, yaw + q_leg[0])
     assert sol.reachable[0]
