@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.table2.ad3 import AD3
-from gaitnet_mpc.table2.cd_problem import (
+from gaitnet_mpc.mpc.cd_problem import (
     CDProblem,
     CDSolution,
     cd_cost,
@@ -18,6 +17,7 @@ from gaitnet_mpc.table2.cd_problem import (
     centroidal_problem,
     rollout,
 )
+from gaitnet_mpc.table2.ad3 import AD3
 from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
 from gaitnet_mpc.table2.joint_space import (
     DT_BOUNDS_S,

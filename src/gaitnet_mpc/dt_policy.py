@@ -58,9 +58,15 @@ PAPER_DT_BOUNDS_S: dict[bool, tuple[float, float]] = {False: (0.045, 0.07), True
 ORACLE_GRID_STEP_S = 0.005
 
 #: The dt policies, by the name :class:`DtPolicyConfig` ``kind`` takes.
-DT_POLICIES = ("fixed", "gaitnet", "oracle", "drawn")
+DT_POLICIES = ("fixed", "gaitnet", "oracle", "optdt", "drawn")
 #: The controller that runs each policy (``drawn``: ``kd`` as the data-collection teacher).
-CONTROLLER_OF_POLICY = {"fixed": "kd", "drawn": "kd", "gaitnet": "gaitnet", "oracle": "oracle"}
+CONTROLLER_OF_POLICY = {
+    "fixed": "kd",
+    "drawn": "kd",
+    "gaitnet": "gaitnet",
+    "oracle": "oracle",
+    "optdt": "kd-optdt",
+}
 
 
 def paper_dt_bounds_s(planar: bool) -> tuple[float, float]:
@@ -117,11 +123,12 @@ class DtPolicyConfig:
 
     Attributes:
         kind: one of :data:`DT_POLICIES`; set by the controller's name (``kd``: fixed,
-            or drawn for data collection; ``gaitnet``; ``oracle``).
-        dt_s: fixed: every step's dt [s]; gaitnet and oracle: ``dt^0``, the dt of the
+            or drawn for data collection; ``gaitnet``; ``oracle``; ``kd-optdt``: optdt, the
+            dt a decision variable of an NLP, :mod:`~gaitnet_mpc.mpc.dt_nlp`).
+        dt_s: fixed: every step's dt [s]; gaitnet, oracle and optdt: ``dt^0``, the dt of the
             first step before any decision and their fallback. None: :data:`NOMINAL_DT_S`,
             for the oracle the lower end of its grid.
-        bounds_s: gaitnet and oracle: (min, max) of a chosen dt [s]; None: the paper's
+        bounds_s: gaitnet, oracle and optdt: (min, max) of a chosen dt [s]; None: the paper's
             bounds of the robot (:data:`PAPER_DT_BOUNDS_S`).
         gaitnet_weights: gaitnet: the network, a shipped name (``humanoid3d-wbmpc``) or a
             path to a ``.npz`` of ``gaitnet-mpc train``; None: the default for the robot.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -48,6 +49,21 @@ def add_parser(sub: Any) -> None:
         action="store_true",
         help="table2: skip the explicit KD-SQP and WBD-SQP columns (the slow ones)",
     )
+    rep.add_argument("--quick", action="store_true", help="fig6: one 10 cm layout, 3 s per method")
+    rep.add_argument(
+        "--seeds", type=int, default=None, help="fig6: layouts per gap width (default: 10)"
+    )
+    rep.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="fig6: cases run in parallel (default: the machine's cores, %(default)s)",
+    )
+    rep.add_argument(
+        "--backend", choices=("process", "ray"), default="process", help="fig6: %(default)s"
+    )
+    rep.add_argument("--address", default=None, help="fig6: Ray cluster address")
+    rep.add_argument("--no-progress", action="store_true", help="fig6: no line per case")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -59,11 +75,29 @@ def main(args: argparse.Namespace) -> int:
     out = check_output_path(args.out if args.out is not None else Path("runs") / args.what, "--out")
     if args.what == "table2":
         reproduce.check_problems(args.problems)
+    elif args.what == "fig6":
+        pass  # its settings are checked when it starts, before any case
     else:
         from gaitnet_mpc.dataset.check import check_dataset
 
         check_dataset(args.data)
     command = shlex.join(["gaitnet-mpc", *args.argv])
+    if args.what == "fig6":  # holds its own lock and status.json (resumable)
+        if out.exists():
+            _check_folder(out, args.what, args.overwrite)
+        report = reproduce.fig6(
+            out,
+            quick=args.quick,
+            seeds=args.seeds,
+            workers=args.workers,
+            backend=args.backend,
+            address=args.address,
+            progress=not args.no_progress,
+            command_line=command,
+        )
+        print(report.read_text(), end="")
+        print(f"results in {out}/")
+        return 0
     with folder_lock(out, what="reproduce"):
         _check_folder(out, args.what, args.overwrite)
         write_status(out, command=command, state="running", todo=[args.what])

@@ -29,6 +29,7 @@ CONTROLLER_HELP = {
     "kd": "the paper's implicit kino-dynamic MPC, fixed dt (default {dt:g} s)",
     "gaitnet": "kd with Gait-Net choosing every step's dt (the paper's method; ignores --dt)",
     "oracle": "kd with a grid search choosing every step's dt (slow; ignores --dt)",
+    "kd-optdt": "kd with each step's dt a variable of an NLP (Fig. 6 baseline 2; ignores --dt)",
     "srbm": "single-rigid-body MPC with Raibert footholds, fixed dt (default {dt:g} s)",
     "wbmpc": "whole-body NMPC (the data-set teacher), fixed dt (default {dt:g} s)",
 }

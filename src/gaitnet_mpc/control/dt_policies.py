@@ -1,6 +1,7 @@
 """Build the dt policy of a kino-dynamic controller from its settings
-(:class:`~gaitnet_mpc.dt_policy.DtPolicyConfig`): a fixed dt, Gait-Net, or the grid-search
-oracle, all behind :class:`~gaitnet_mpc.mpc.sequential.DtPolicy`."""
+(:class:`~gaitnet_mpc.dt_policy.DtPolicyConfig`): a fixed dt, Gait-Net, the grid-search
+oracle or the dt of an NLP (``kd-optdt``), all behind
+:class:`~gaitnet_mpc.mpc.sequential.DtPolicy`."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.step_durations import StepDurations
 from gaitnet_mpc.gaitnet import WEIGHTS_DIR, GaitNet, default_weights_path
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
+from gaitnet_mpc.mpc.dt_nlp import NLPDt, NLPDtConfig
 from gaitnet_mpc.mpc.dt_oracle import OracleConfig, OracleDt
 from gaitnet_mpc.mpc.sequential import (
     DtPolicy,
@@ -77,6 +79,15 @@ def make_dt_policy(
             bounds_s=config.bounds_for(planar),
             nominal_dt_s=config.dt_s if config.dt_s is not None else NOMINAL_DT_S,
         )
+    if config.kind == "optdt":
+        nlp = NLPDt(
+            NLPDtConfig(
+                bounds_s=config.bounds_for(planar),
+                nominal_dt_s=config.dt_s if config.dt_s is not None else NOMINAL_DT_S,
+            )
+        )
+        nlp.attach(SequentialKDMPC(robot, sequential))
+        return nlp
     grid = oracle_grid_s(config.bounds_for(planar), config.oracle_grid_step_s)
     oracle = OracleDt(
         OracleConfig(dts_s=grid, nominal_dt_s=grid[0] if config.dt_s is None else config.dt_s)

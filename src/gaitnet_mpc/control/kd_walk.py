@@ -1,15 +1,17 @@
-"""``kd``, ``gaitnet``, ``oracle``: walking with the implicit kino-dynamic sequential MPC
-(paper Sec. IV-B), the three differing only in the dt policy of ``KDWalkConfig.dt_policy``.
+"""``kd``, ``gaitnet``, ``oracle``, ``kd-optdt``: walking with the implicit kino-dynamic
+sequential MPC (paper Sec. IV-B), the four differing only in the dt policy of
+``KDWalkConfig.dt_policy``.
 
 At each step start the dt policy (a fixed dt for ``kd``; Gait-Net from the state and the
-iterate's touchdown for ``gaitnet``, Algorithm 1 line 8; a grid search for ``oracle``)
-sets the step's MPC sampling time and the full sequential solve runs (Algorithm 1, up to
-``j_max`` QPs); during the step the same dt is kept and the MPC replans every
-``replan_period_s`` (at least once per stage, Remark 4). The footholds the MPC chooses
-are the swing targets of the low-level controller; the next touchdown is bounded by the
-one-step terrain preview (eq. 24). With ``KDWalkConfig.preview`` set, the patch of that
-touchdown and the CoM path along the course come instead from a multi-step LIP footstep
-plan, re-made at every solve (:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
+iterate's touchdown for ``gaitnet``, Algorithm 1 line 8; a grid search for ``oracle``; an
+NLP with dt as a variable for ``kd-optdt``) sets the step's MPC sampling time and the full
+sequential solve runs (Algorithm 1, up to ``j_max`` QPs); during the step the same dt is
+kept and the MPC replans every ``replan_period_s`` (at least once per stage, Remark 4).
+The footholds the MPC chooses are the swing targets of the low-level controller; the next
+touchdown is bounded by the one-step terrain preview (eq. 24). With
+``KDWalkConfig.preview`` set, the patch of that touchdown and the CoM path along the
+course come instead from a multi-step LIP footstep plan, re-made at every solve
+(:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from gaitnet_mpc.gait.preview import PreviewPlan, plan_preview
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.geometry import heading_axes
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
+from gaitnet_mpc.mpc.dt_nlp import NLPDt
 from gaitnet_mpc.mpc.dt_oracle import OracleDt
 from gaitnet_mpc.mpc.sequential import (
     CoMReference,
@@ -130,7 +133,7 @@ class KDWalkController(WalkingBase):
 
     def last_dt_decision(self) -> dict[str, Any] | None:
         policy = self.dt_policy
-        if isinstance(policy, GaitNetDt | OracleDt) and policy.decisions:
+        if isinstance(policy, GaitNetDt | OracleDt | NLPDt) and policy.decisions:
             return policy.decisions[-1].to_dict()
         return None
 
@@ -138,7 +141,7 @@ class KDWalkController(WalkingBase):
         policy = self.dt_policy
         if isinstance(policy, GaitNetDt):
             return {**policy.summary(), "weights": policy.weights_info()}
-        return policy.summary() if isinstance(policy, OracleDt) else None
+        return policy.summary() if isinstance(policy, OracleDt | NLPDt) else None
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:

@@ -32,8 +32,13 @@ class ControllerContext:
 
 #: The controllers that are ``kd`` with another dt policy: the same settings and presets,
 #: and the ``KDWalkConfig.dt_policy.kind`` each name sets.
-KD_FAMILY = ("kd", "gaitnet", "oracle")
-POLICY_OF_CONTROLLER = {"kd": "fixed", "gaitnet": "gaitnet", "oracle": "oracle"}
+KD_FAMILY = ("kd", "gaitnet", "oracle", "kd-optdt")
+POLICY_OF_CONTROLLER = {
+    "kd": "fixed",
+    "gaitnet": "gaitnet",
+    "oracle": "oracle",
+    "kd-optdt": "optdt",
+}
 #: The dt policies each of them may run (``drawn``: the data-collection teacher).
 POLICIES_OF_CONTROLLER = {
     name: tuple(k for k, c in CONTROLLER_OF_POLICY.items() if c == name) for name in KD_FAMILY
@@ -170,6 +175,7 @@ def _wbmpc(ctx: ControllerContext) -> Controller:
 CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
     "gaitnet": _kd_family("gaitnet"),
     "kd": _kd_family("kd"),
+    "kd-optdt": _kd_family("kd-optdt"),
     "oracle": _kd_family("oracle"),
     "stand": _stand,
     "srbm": _srbm,

@@ -40,14 +40,44 @@ def table2(
     return reproduce_table2(out, problems, progress=progress, with_joint_space=with_joint_space)
 
 
+def fig6(
+    out: Path,
+    *,
+    quick: bool = False,
+    seeds: int | None = None,
+    workers: int = 1,
+    backend: str = "process",
+    address: str | None = None,
+    progress: bool = True,
+    command_line: str = "",
+) -> Path:
+    """Fig. 6: the 2-D biped over gaps of 5-15 cm with a fixed, an optimised and a
+    Gait-Net dt (:mod:`~gaitnet_mpc.experiments.fig6`); resumes an interrupted run."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.experiments.fig6 import Options, reproduce_fig6
+    from gaitnet_mpc.experiments.fig6_cases import Fig6Settings
+
+    settings = Fig6Settings.quick_settings() if quick else Fig6Settings()
+    if seeds is not None:
+        settings = replace(settings, seeds=seeds)
+    options = Options(workers=workers, backend=backend, address=address, progress=progress)
+    reproduce_fig6(out, settings, options, command_line)
+    return out / "fig6.md"
+
+
 #: The files each one writes into its folder (what ``--overwrite`` may replace; a table2
 #: folder with its own files is resumed, not refused).
 ARTIFACTS: dict[str, tuple[str, ...]] = {
     "table1": ("table1.md", "table1.csv", "fig4.png", "full", "pca"),
     "table2": ("problems.npz", "problems.tmp.npz", "records.jsonl", "table2.md", "table2.md.tmp"),
-}
+    "fig6": (
+        "cases.jsonl", "courses", "errors.log", "fig6.md", "fig6.csv", "fig6.png",
+        "strip_kd.png", "strip_kd-optdt.png", "strip_gaitnet.png",
+    ),
+}  # fmt: skip
 #: The ones that resume from what an earlier, interrupted run left in the folder.
-RESUMABLE = frozenset({"table2"})
+RESUMABLE = frozenset({"table2", "fig6"})
 #: Most recorded problems of table2 (the paper's table is over 100; each is ~1 s to record).
 MAX_PROBLEMS = 10_000
 
@@ -55,4 +85,5 @@ MAX_PROBLEMS = 10_000
 REPRODUCIBLE = {
     "table1": "Gait-Net feature spaces (Table I)",
     "table2": "solvers on the same MPC problems (Table II)",
+    "fig6": "2-D biped over 5-15 cm gaps: fixed, optimised and Gait-Net dt (Fig. 6)",
 }

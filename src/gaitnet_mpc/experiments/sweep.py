@@ -31,7 +31,7 @@ from collections.abc import Callable, Generator
 from contextlib import closing
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from gaitnet_mpc.errors import ConfigError, GaitNetMPCError, PartialFailure
 from gaitnet_mpc.experiments.collect import CollectOptions
@@ -136,6 +136,12 @@ class SweepSettings:
         }
 
 
+class SettingsLike(Protocol):
+    """Settings that identify a folder of cases (:func:`read_records`)."""
+
+    def to_dict(self) -> dict[str, Any]: ...
+
+
 def check_inputs(settings: SweepSettings, folder: Path) -> Path:
     """What a worker would find wrong, found before any case starts: the output path and
     every controller's settings (``@DT`` in the accepted range)."""
@@ -152,8 +158,11 @@ def check_inputs(settings: SweepSettings, folder: Path) -> Path:
 
 
 # ----------------------------------------------------------------------------- storage
-def read_records(path: Path, settings: SweepSettings) -> dict[str, dict[str, Any]]:
-    """The finished cases in ``path`` by key (a torn last line is ignored).
+def read_records(
+    path: Path, settings: SettingsLike, header: str = "sweep_settings"
+) -> dict[str, dict[str, Any]]:
+    """The finished cases in ``path`` by key (a torn last line is ignored); the line with
+    the key ``header`` holds the settings (``reproduce fig6`` keeps its cases this way).
 
     Raises:
         ConfigError: the file holds another sweep's settings.
@@ -166,9 +175,9 @@ def read_records(path: Path, settings: SweepSettings) -> dict[str, dict[str, Any
             item = json.loads(line)
         except json.JSONDecodeError:
             continue  # a line cut by a kill during the write
-        if "sweep_settings" in item:
-            if item["sweep_settings"] != settings.to_dict():
-                old, new = item["sweep_settings"], settings.to_dict()
+        if header in item:
+            if item[header] != settings.to_dict():
+                old, new = item[header], settings.to_dict()
                 diff = sorted(k for k in old.keys() | new.keys() if old.get(k) != new.get(k))
                 raise ConfigError(
                     "--out",

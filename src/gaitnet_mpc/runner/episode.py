@@ -28,6 +28,7 @@ height (at most 25 % below its start height). ``outcome`` is ``"interrupted"``,
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -190,6 +191,7 @@ def run_episode(
     progress: bool = True,
     meta: dict[str, Any] | None = None,
     viewer: Any | None = None,
+    on_step: Callable[[Simulator], None] | None = None,
 ) -> dict[str, Any]:
     """Simulate until ``duration_s`` or a fall; return (and write) the summary.
 
@@ -200,6 +202,8 @@ def run_episode(
         viewer: an open ``mujoco.viewer.launch_passive`` handle on ``sim.model`` /
             ``sim.data``, synchronised at 60 Hz of simulated time and paced to real time
             (it never runs faster than real time; it may run slower). None: no viewer.
+        on_step: called with ``sim`` after every physics step (e.g. to keep poses for a
+            snapshot strip); it must not change the simulation.
     """
     if not (np.isfinite(duration_s) and duration_s > 0):
         raise ConfigError("--duration", duration_s, "a finite duration > 0 s")
@@ -243,6 +247,8 @@ def run_episode(
             events.update(state, None if tel is None else {tel.swing_foot: tel.step_end_s})
             log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
             sim.step(tau)
+            if on_step is not None:
+                on_step(sim)
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
                 assert writer is not None  # made together with the renderer
                 t_r = time.perf_counter()

@@ -3,7 +3,7 @@
 The only nonconvex term of the centroidal dynamics (eq. 10) is the bilinear torque
 ``(p_f,i - p_c,k) x f_i``. Fixing one factor makes it linear, so the paper's alternating
 direction baseline (after [19], with three directions, "mountain climbing" [44]) cycles
-through three QPs on the :class:`~gaitnet_mpc.table2.cd_problem.CDProblem`, each over
+through three QPs on the :class:`~gaitnet_mpc.mpc.cd_problem.CDProblem`, each over
 one block of variables plus the states ``s_k = [p_c; l_G; H_ang; k_G]`` (k = 1..h),
 which enter the dynamics linearly and so are free in all three:
 
@@ -37,10 +37,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.mpc.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns, cd_cost
 from gaitnet_mpc.mpc.centroidal_model import skew_batch
 from gaitnet_mpc.mpc.kd_iterate import KDTolerances
 from gaitnet_mpc.mpc.qp import QPProblem, QPWorkspace, make_workspace
-from gaitnet_mpc.table2.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns, cd_cost
 
 NW = NW_CD  # per stage: state 12, f 6, tau 6, p_f 6 (same layout as CD-SQP)
 _FREE_TIE_M = 1e3

@@ -1,6 +1,6 @@
 """CD-SQP: the centroidal-dynamics MPC solved by CasADi's ``sqpmethod`` (Table II baseline).
 
-The problem is :class:`~gaitnet_mpc.table2.cd_problem.CDProblem` (eq. 10 with eq. 20,
+The problem is :class:`~gaitnet_mpc.mpc.cd_problem.CDProblem` (eq. 10 with eq. 20,
 eq. 18's cost, eqs. 21-24's constraints, fixed ``dt``), transcribed once per horizon and
 contact-model size as a CasADi NLP with the per-problem data as parameters, and solved
 as the paper did: ``sqpmethod`` with qpOASES for the QP sub-problems (Sec. V-A). Every
@@ -32,7 +32,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gaitnet_mpc.table2.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns
+from gaitnet_mpc.mpc.cd_nlp import CDSymbols, cd_bounds, cd_terms
+from gaitnet_mpc.mpc.cd_problem import NS_CD, NW_CD, CDProblem, CDSolution, cd_columns
 from gaitnet_mpc.table2.sqp_common import SQPConfig, StepTest, build_sqp, run_sqp
 
 NW = NW_CD  # variables per stage: state 12, f 6, tau 6, p_f 6
@@ -90,56 +91,21 @@ class CDSQP:
         return self._nlps[key]
 
     def _transcribe(self, p: CDProblem, h: int, mw: int, sep: bool) -> tuple[dict[str, Any], Any]:
-        c = p.config
-        m = c.mass_kg
         w = ca.SX.sym("w", NW * h)
-        s0 = ca.SX.sym("s0", NS_CD)
-        dts = ca.SX.sym("dts", h)
-        cw = ca.SX.sym("cw", h * 2 * mw * 6)
-        h_ref = ca.SX.sym("h_ref", h * 6)
-        H_ref = ca.SX.sym("H_ref", h * 6)
-        pc_ref = ca.SX.sym("pc_ref", h * 3)
-        pf_ref = ca.SX.sym("pf_ref", h * 6)
-        axis = ca.SX.sym("axis", h * 2 if sep else 0)
-        params = ca.vertcat(s0, dts, cw, h_ref, H_ref, pc_ref, pf_ref, axis)
-        g_vec = ca.DM([0.0, 0.0, -c.gravity_mps2])
-        wp, wm = np.asarray(c.w_pose), np.asarray(c.w_momentum)
-        wpc, wpf = np.asarray(c.w_p_com), np.asarray(c.w_p_foot)
-        dyn, wrench, ties, seps = [], [], [], []
-        cost = ca.SX(0.0)
-        s = s0
-        for k in range(h):
-            blk = w[NW * k : NW * (k + 1)]
-            s_next, f, tau, pf = blk[:12], blk[12:18], blk[18:24], blk[24:30]
-            pc, lg, ha, kg = s[:3], s[3:6], s[6:9], s[9:12]
-            dt = dts[k]
-            torque = ca.SX.zeros(3)
-            for i in range(2):
-                fi, ti, pi = f[3 * i : 3 * i + 3], tau[3 * i : 3 * i + 3], pf[3 * i : 3 * i + 3]
-                torque += ca.cross(pi - pc, fi) + ti
-                rows = ca.reshape(cw[(k * 2 + i) * mw * 6 : (k * 2 + i + 1) * mw * 6], 6, mw).T
-                wrench.append(ca.mtimes(rows, ca.vertcat(fi, ti)))
-            pred = ca.vertcat(
-                pc + lg / m * dt, lg + (f[:3] + f[3:] + m * g_vec) * dt, ha + kg * dt,
-                kg + torque * dt,
-            )  # fmt: skip
-            dyn.append(s_next - pred)
-            if k + 1 < h:
-                ties.append(w[NW * (k + 1) + 24 : NW * (k + 1) + 30] - pf)
-            if sep:
-                d = pf[0:2] - pf[3:5]
-                seps.append(axis[2 * k] * d[0] + axis[2 * k + 1] * d[1])
-            # eq. 18 (H_lin = m p_c)
-            pc1, lg1, ha1, kg1 = s_next[:3], s_next[3:6], s_next[6:9], s_next[9:12]
-            pose = ca.vertcat(m * pc1, ha1) - H_ref[6 * k : 6 * k + 6]
-            mom = ca.vertcat(lg1, kg1) - h_ref[6 * k : 6 * k + 6]
-            cost += ca.dot(wp * pose, pose) + ca.dot(wm * mom, mom)
-            e_pc = pc1 - pc_ref[3 * k : 3 * k + 3]
-            e_pf = pf - pf_ref[6 * k : 6 * k + 6]
-            cost += ca.dot(wpc * e_pc, e_pc) + ca.dot(np.tile(wpf, 2) * e_pf, e_pf)
-            cost += c.w_force * ca.dot(f, f) + c.w_moment * ca.dot(tau, tau)
-            s = s_next
-        g = ca.vertcat(*dyn, *wrench, *ties, *seps)
+        sym = CDSymbols(
+            s0=ca.SX.sym("s0", NS_CD),
+            dts=ca.SX.sym("dts", h),
+            cw=ca.SX.sym("cw", h * 2 * mw * 6),
+            h_ref=ca.SX.sym("h_ref", h * 6),
+            H_ref=ca.SX.sym("H_ref", h * 6),
+            pc_ref=ca.SX.sym("pc_ref", h * 3),
+            pf_ref=ca.SX.sym("pf_ref", h * 6),
+            axis=ca.SX.sym("axis", h * 2 if sep else 0),
+        )
+        params = ca.vertcat(
+            sym.s0, sym.dts, sym.cw, sym.h_ref, sym.H_ref, sym.pc_ref, sym.pf_ref, sym.axis
+        )
+        terms = cd_terms(p.config, w, sym, h, mw, sep)
         cols = cd_columns(h)
         pos = np.concatenate([cols["state"][:, :3].ravel(), cols["pf"].ravel()])
         f_cols, tau_cols = cols["f"].ravel(), cols["tau"].ravel()
@@ -147,7 +113,7 @@ class CDSQP:
         def measure(x: np.ndarray) -> dict[str, np.ndarray]:
             return {"position": x[pos], "force": x[f_cols], "moment": x[tau_cols]}
 
-        return {"x": w, "p": params, "f": cost, "g": g}, measure
+        return {"x": w, "p": params, "f": terms.cost, "g": terms.constraints()}, measure
 
     def _arguments(self, p: CDProblem) -> dict[str, Any]:
         """Initial guess (the common ``u^0``), parameters and bounds of one problem."""
@@ -158,36 +124,16 @@ class CDSQP:
         x0[cols["f"]] = p.guess.f.reshape(h, 6)
         x0[cols["tau"]] = p.guess.tau.reshape(h, 6)
         x0[cols["pf"]] = p.guess.p_foot.reshape(h, 6)
-        lbx = np.full(NW * h, -np.inf)
-        ubx = np.full(NW * h, np.inf)
-        lbx[cols["pf"]] = p.pf_lb_m.reshape(h, 6)
-        ubx[cols["pf"]] = p.pf_ub_m.reshape(h, 6)
-        # swing (eq. 23, sigma = 0): the wrench is fixed to zero by its box, and the foot's
-        # wrench rows are left free (C w = 0 on 10 rows of 6 unknowns is a degenerate
-        # equality set that stalls qpOASES; the set of plans is the same)
-        swing = ~np.repeat(p.contact, 3, axis=1)  # (h, 6)
-        for name in ("f", "tau"):
-            lbx[cols[name]] = np.where(swing, 0.0, -np.inf)
-            ubx[cols[name]] = np.where(swing, 0.0, np.inf)
-        stance_rows = np.repeat(p.contact[:, :, None], p.wrench_lo.shape[2], axis=2)
-        w_lo = np.where(stance_rows, p.wrench_lo, -np.inf).ravel()
-        w_hi = np.where(stance_rows, p.wrench_hi, np.inf).ravel()
-        # _build reads each (mw, 6) block as reshape(v, 6, mw).T (column-major): row-major C
+        lbx, ubx, lbg, ubg = cd_bounds(
+            p.contact, p.pf_lb_m, p.pf_ub_m, p.wrench_lo, p.wrench_hi, p.tie_free,
+            p.sep_min_m if p.sep_axis is not None else None,
+        )  # fmt: skip
+        # cd_terms reads each (mw, 6) block as reshape(v, 6, mw).T (column-major): row-major C
         cw = p.wrench_c.reshape(-1)
         params = np.concatenate(
             [p.s0, p.dts_s, cw, p.h_ref[1:].ravel(), p.H_ref[1:].ravel(),
              p.p_com_ref[1:].ravel(), p.p_foot_ref.ravel(),
              p.sep_axis.ravel() if p.sep_axis is not None else np.zeros(0)]
-        )  # fmt: skip
-        free = np.repeat(p.tie_free, 3, axis=1)  # (h-1, 6)
-        big = 1e3
-        lbg = np.concatenate(
-            [np.zeros(NS_CD * h), w_lo, np.where(free, -big, 0.0).ravel(),
-             p.sep_min_m if p.sep_axis is not None else np.zeros(0)]
-        )  # fmt: skip
-        ubg = np.concatenate(
-            [np.zeros(NS_CD * h), w_hi, np.where(free, big, 0.0).ravel(),
-             np.full(h, big) if p.sep_axis is not None else np.zeros(0)]
         )  # fmt: skip
         return {"x0": x0, "p": params, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
 
@@ -200,7 +146,7 @@ class CDSQP:
         """Solve ``p`` cold from its ``guess`` (module docstring). A QP plugin that fails
         hard (CasADi raises) gives a result with ``converged=False``, the guess as plan,
         ``max_iter`` QPs and a NaN cost."""
-        from gaitnet_mpc.table2.cd_problem import cd_cost
+        from gaitnet_mpc.mpc.cd_problem import cd_cost
 
         if self._prepared is None or self._prepared[0] != id(p):
             self.prepare(p)

@@ -13,7 +13,7 @@ so each recorded :class:`~gaitnet_mpc.mpc.sequential.KDProblem` is mapped to:
 * :class:`JointSpaceProblem`: the measured state, the kd reference's joint-space
   trajectory (``q_ref``, ``v_ref`` of ``f_ref``, Algorithm 1 lines 2-3, which the
   proposed method's own references come from), the centroidal problem it extends
-  (:func:`~gaitnet_mpc.table2.cd_problem.centroidal_problem`) and the sampling-time
+  (:func:`~gaitnet_mpc.mpc.cd_problem.centroidal_problem`) and the sampling-time
   variables: one ``dt`` per step of the horizon (a run of stages with the same contact
   pattern), bounded by Table VI's ``[0.045, 0.07] s``. The step in progress keeps its
   recorded stage lengths unless the problem is a step start (``choose_dt``), as in the
@@ -30,10 +30,10 @@ import numpy as np
 from gaitnet_mpc.dt_policy import paper_dt_bounds_s
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.reference import make_reference
+from gaitnet_mpc.mpc.cd_problem import CDProblem, centroidal_problem
 from gaitnet_mpc.mpc.sequential import KDProblem, SequentialKDMPC
 from gaitnet_mpc.mpc.wholebody.dynamics import WholeBodyDynamics, quat_wxyz_to_rot
 from gaitnet_mpc.robots import FEET, RobotModel
-from gaitnet_mpc.table2.cd_problem import CDProblem, centroidal_problem
 
 #: Table VI's range of the MPC sampling time [s] (the variable-dt baselines' bounds).
 DT_BOUNDS_S = paper_dt_bounds_s(planar=False)

@@ -48,9 +48,9 @@ import casadi as ca
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.mpc.cd_problem import CDSolution, cd_cost
 from gaitnet_mpc.mpc.wholebody.dynamics import quat_mul
 from gaitnet_mpc.robots import FEET
-from gaitnet_mpc.table2.cd_problem import CDSolution, cd_cost
 from gaitnet_mpc.table2.joint_space import (
     DT_BOUNDS_S,
     JointSpaceProblem,

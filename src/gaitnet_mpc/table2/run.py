@@ -20,7 +20,7 @@ each with
 all cold from the same ``u^0`` (the references, weight shared by the stance feet) and
 stopped by the same step test (Table X). The CD problem of each KD problem is built
 outside the timed region. Each method's plan is also scored by eq. 18 on the CD problem
-(:func:`~gaitnet_mpc.table2.cd_problem.cd_cost`; the proposed plan's states rolled out
+(:func:`~gaitnet_mpc.mpc.cd_problem.cd_cost`; the proposed plan's states rolled out
 through the exact dynamics), reported as the median ratio to CD-SQP's cost.
 """
 
@@ -37,8 +37,8 @@ import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.machine import machine_info
+from gaitnet_mpc.mpc.cd_problem import CDSolution, cd_cost, centroidal_problem, rollout
 from gaitnet_mpc.table2.ad3 import AD3
-from gaitnet_mpc.table2.cd_problem import CDSolution, cd_cost, centroidal_problem, rollout
 from gaitnet_mpc.table2.cd_sqp import CDSQP, CDSQPConfig
 from gaitnet_mpc.table2.joint_space import (
     SymbolicKinematics,

@@ -345,6 +345,40 @@ def uneven_course(
     return Course("uneven", tuple(patches), seed=int(seed))
 
 
+#: ``gap_row_course`` (Fig. 6): holes, first hole start and ground between holes [mm].
+_ROW_COUNT = 4
+_ROW_X0_MM = (1000, 1500)
+_ROW_GROUND_MM = (400, 800)
+
+
+def gap_row_course(width_m: float, seed: int, count: int = _ROW_COUNT) -> Course:
+    """A row of ``count`` holes of one width ``width_m`` at seeded positions: Fig. 6's
+    2-D gap courses (gaps of 5-15 cm), named ``gap-row``.
+
+    ``numpy.random.default_rng(seed)`` draws the first hole's start uniformly in
+    [1.0, 1.5] m and the ground between consecutive holes uniformly in [0.4, 0.8] m
+    (whole millimetres), so four 15 cm holes end before x = 4.5 m.  Not a built-in name
+    (its width is a parameter the command line has no place for): ``gaitnet-mpc reproduce
+    fig6`` writes each layout it runs as a course file.
+    """
+    seed_checked = layout_seed(seed, "gap-row.seed")
+    if seed_checked is None:
+        raise CourseFormatError("gap-row.seed", seed, "a non-negative integer")
+    width_m = _param(width_m, "gap-row.width_m", 0.0, 1.0, "a gap width in (0, 1) m")
+    if isinstance(count, bool) or not isinstance(count, int | np.integer) or not 1 <= count <= 20:
+        raise CourseFormatError("gap-row.count", count, "an integer in [1, 20]")
+    width_mm = round(width_m * 1000)
+    rng = np.random.default_rng(seed_checked)
+    edges_mm = [round(_COURSE_X_START_M * 1000)]
+    x0 = _draw_mm(rng, _ROW_X0_MM)
+    for _ in range(int(count)):
+        edges_mm += [x0, x0 + width_mm]
+        x0 += width_mm + _draw_mm(rng, _ROW_GROUND_MM)
+    edges = [e / 1000.0 for e in edges_mm] + [_COURSE_X_END_M]
+    patches = tuple(_platform(edges[i], edges[i + 1]) for i in range(0, len(edges), 2))
+    return Course("gap-row", patches, seed=seed_checked)
+
+
 #: Built-in course factories by name (read-only).  Each accepts keyword parameters
 #: (see the factory's docstring) and returns a validated :class:`Course`.
 BUILTIN_COURSES: Mapping[str, Callable[..., Course]] = types.MappingProxyType(
