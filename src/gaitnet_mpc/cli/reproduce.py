@@ -54,6 +54,19 @@ def add_parser(sub: Any) -> None:
         "--seeds", type=int, default=None, help="fig6: layouts per gap width (default: 10)"
     )
     rep.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="fig6: the first layout seed (default: %(default)s, the reported seeds; tune on "
+        ">= 100)",
+    )
+    rep.add_argument(
+        "--gaitnet-weights",
+        default=None,
+        metavar="NAME|PATH",
+        help="fig6: Gait-Net's weights, a shipped name or a .npz (default: the robot's)",
+    )
+    rep.add_argument(
         "--workers",
         type=int,
         default=os.cpu_count() or 1,
@@ -89,6 +102,8 @@ def main(args: argparse.Namespace) -> int:
             out,
             quick=args.quick,
             seeds=args.seeds,
+            first_seed=args.first_seed,
+            gaitnet_weights=args.gaitnet_weights,
             workers=args.workers,
             backend=args.backend,
             address=args.address,

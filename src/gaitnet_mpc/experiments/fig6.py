@@ -65,7 +65,7 @@ def _write_courses(folder: Path, settings: Fig6Settings) -> None:
     from gaitnet_mpc.terrain.builtin_courses import gap_row_course
 
     for width in settings.widths_m:
-        for seed in range(settings.seeds):
+        for seed in settings.seed_list:
             course = gap_row_course(width, seed)
             text = json.dumps(course.to_dict(), indent=1) + "\n"
             write_atomic(folder / course_file(width, seed), text)
@@ -93,6 +93,7 @@ def run_case(item: tuple[dict[str, Any], str]) -> dict[str, Any]:
         vx_mps=s.vx_mps,
         duration_s=s.duration_s,
         dt_s=s.fixed_dt_s if method == "kd" else None,
+        gaitnet_weights=s.gaitnet_weights if method == "gaitnet" else None,
     )
     episode = build_episode(scenario)
     trace: list[tuple[float, float]] = []

@@ -28,7 +28,10 @@ class Fig6Settings:
     Attributes:
         methods: controller names among :data:`METHODS`.
         widths_m: gap widths [m], each in (0, 0.3].
-        seeds: layouts per width (seeds 0 .. seeds - 1).
+        seeds: layouts per width (seeds ``first_seed`` .. ``first_seed + seeds - 1``).
+        first_seed: the first layout seed (0: the reported seeds; tune on >= 100).
+        gaitnet_weights: Gait-Net's weights, a shipped name or a path (None: the
+            robot's default).
         vx_mps: forward command [m/s].
         duration_s: simulated time per case [s].
         fixed_dt_s: the dt of method (1) [s].
@@ -38,6 +41,8 @@ class Fig6Settings:
     methods: tuple[str, ...] = METHODS
     widths_m: tuple[float, ...] = WIDTHS_M
     seeds: int = 10
+    first_seed: int = 0
+    gaitnet_weights: str | None = None
     vx_mps: float = 0.5
     duration_s: float = 10.0
     fixed_dt_s: float = 0.045
@@ -50,6 +55,10 @@ class Fig6Settings:
             raise ConfigError("widths_m", self.widths_m, "gap widths in (0, 0.3] m")
         if isinstance(self.seeds, bool) or not (isinstance(self.seeds, int) and self.seeds >= 1):
             raise ConfigError("--seeds", self.seeds, "an integer >= 1")
+        if isinstance(self.first_seed, bool) or not (
+            isinstance(self.first_seed, int) and 0 <= self.first_seed <= 2**31
+        ):
+            raise ConfigError("--first-seed", self.first_seed, "an integer in [0, 2^31]")
         if not 0.1 <= self.vx_mps <= 1.0:
             raise ConfigError("vx_mps", self.vx_mps, "a forward speed in [0.1, 1] m/s")
         if not 1.0 <= self.duration_s <= 60.0:
@@ -67,6 +76,8 @@ class Fig6Settings:
             "methods": list(self.methods),
             "widths_m": list(self.widths_m),
             "seeds": self.seeds,
+            "first_seed": self.first_seed,
+            "gaitnet_weights": self.gaitnet_weights,
             "vx_mps": self.vx_mps,
             "duration_s": self.duration_s,
             "fixed_dt_s": self.fixed_dt_s,
@@ -80,11 +91,18 @@ class Fig6Settings:
             methods=tuple(d["methods"]),
             widths_m=tuple(float(w) for w in d["widths_m"]),
             seeds=int(d["seeds"]),
+            first_seed=int(d["first_seed"]),
+            gaitnet_weights=d["gaitnet_weights"],
             vx_mps=float(d["vx_mps"]),
             duration_s=float(d["duration_s"]),
             fixed_dt_s=float(d["fixed_dt_s"]),
             quick=bool(d["quick"]),
         )
+
+    @property
+    def seed_list(self) -> range:
+        """The layout seeds of every width."""
+        return range(self.first_seed, self.first_seed + self.seeds)
 
     @property
     def strip_width_m(self) -> float:
@@ -101,7 +119,7 @@ def make_cases(settings: Fig6Settings) -> list[dict[str, Any]]:
     """Every case, widths outermost, then seeds, then methods."""
     cases = []
     for width in settings.widths_m:
-        for seed in range(settings.seeds):
+        for seed in settings.seed_list:
             for method in settings.methods:
                 cm = round(width * 100, 3)
                 cases.append(
@@ -111,7 +129,7 @@ def make_cases(settings: Fig6Settings) -> list[dict[str, Any]]:
                         "width_m": width,
                         "seed": seed,
                         "course_file": course_file(width, seed),
-                        "strip": seed == 0 and width == settings.strip_width_m,
+                        "strip": seed == settings.first_seed and width == settings.strip_width_m,
                         "settings": settings.to_dict(),
                     }
                 )

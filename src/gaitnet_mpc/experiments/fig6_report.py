@@ -212,7 +212,8 @@ def markdown(
         "# Fig. 6: the 2-D biped over gaps, fixed vs optimised vs Gait-Net step duration",
         "",
         f"`{ROBOT}`, {settings.vx_mps:g} m/s, {settings.duration_s:g} s per case, "
-        f"seeds 0-{settings.seeds - 1} per width (four gaps per layout at seeded positions); "
+        f"seeds {settings.first_seed}-{settings.seed_list[-1]} per width (four gaps per "
+        "layout at seeded positions); "
         f"success = no fall, no foothold violation, no leg contact. Fixed dt "
         f"{settings.fixed_dt_s:g} s; the optimised dt and Gait-Net within Table V's "
         "[0.03, 0.06] s.",
@@ -268,12 +269,12 @@ def figure(folder: Path, settings: Fig6Settings, records: Sequence[Record]) -> P
     ax_a.set(xlabel="gap width [cm]", ylabel="success [%]", ylim=(-5, 105), title="(a) success")
     ax_a.legend(fontsize=8)
     strip_w = settings.strip_width_m
-    course = Course.from_json(folder / course_file(strip_w, 0))
+    course = Course.from_json(folder / course_file(strip_w, settings.first_seed))
     patches = sorted(course.patches, key=lambda p: p.x_min)
     for a, b in itertools.pairwise(patches):
         ax_b.axvspan(a.x_max, b.x_min, color="0.85")
     for m in settings.methods:
-        rs = [r for r in _by(records, m, strip_w) if r["case"]["seed"] == 0]
+        rs = [r for r in _by(records, m, strip_w) if r["case"]["seed"] == settings.first_seed]
         if not rs:
             continue
         steps = rs[0]["result"]["steps"]
@@ -285,7 +286,8 @@ def figure(folder: Path, settings: Fig6Settings, records: Sequence[Record]) -> P
         xlabel="CoM x at the step start [m] (gaps shaded)",
         ylabel="step duration 5 dt [s]",
         xlim=(0.5, 5.0),
-        title=f"(b) step durations, {strip_w * 100:g} cm gaps, seed 0 (Fig. 6d)",
+        title=f"(b) step durations, {strip_w * 100:g} cm gaps, seed {settings.first_seed} "
+        "(Fig. 6d)",
     )
     ax_b.legend(fontsize=8)
     data = [

@@ -45,6 +45,8 @@ def fig6(
     *,
     quick: bool = False,
     seeds: int | None = None,
+    first_seed: int = 0,
+    gaitnet_weights: str | None = None,
     workers: int = 1,
     backend: str = "process",
     address: str | None = None,
@@ -61,6 +63,7 @@ def fig6(
     settings = Fig6Settings.quick_settings() if quick else Fig6Settings()
     if seeds is not None:
         settings = replace(settings, seeds=seeds)
+    settings = replace(settings, first_seed=first_seed, gaitnet_weights=gaitnet_weights)
     options = Options(workers=workers, backend=backend, address=address, progress=progress)
     reproduce_fig6(out, settings, options, command_line)
     return out / "fig6.md"
