@@ -31,7 +31,7 @@ TOML layout of ``scenario.toml``::
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -447,6 +447,7 @@ def run_scenario(
     robot: RobotModel | None = None,
     episode: Episode | None = None,
     extra_warnings: Sequence[str] = (),
+    on_step: Callable[[Simulator], None] | None = None,
 ) -> dict[str, Any]:
     """Simulate ``scenario`` until its duration or a fall; return the summary.
 
@@ -462,6 +463,8 @@ def run_scenario(
             preparing ``out_dir``); None: built here.
         extra_warnings: the caller's own notes on ineffective options (recorded with
             :func:`scenario_warnings` in the summary's ``warnings``).
+        on_step: called with the simulator after every physics step (``run_episode``'s
+            hook: e.g. poses for a snapshot strip); it must not change the simulation.
     """
     if episode is None:
         episode = build_episode(scenario, robot=robot)
@@ -484,6 +487,7 @@ def run_scenario(
             progress=progress,
             meta=meta,
             viewer=viewer,
+            on_step=on_step,
         )
     finally:
         if viewer is not None:

@@ -49,7 +49,15 @@ def add_parser(sub: Any) -> None:
         action="store_true",
         help="table2: skip the explicit KD-SQP and WBD-SQP columns (the slow ones)",
     )
-    rep.add_argument("--quick", action="store_true", help="fig6: one 10 cm layout, 3 s per method")
+    rep.add_argument(
+        "--quick",
+        action="store_true",
+        help="fig6: one 10 cm layout, 3 s per method; fig7, fig8, fig11, obstacle: 2.5-4 s "
+        "runs without video (the test suite's)",
+    )
+    rep.add_argument(
+        "--no-video", action="store_true", help="fig7, fig8, fig11, obstacle: no run videos"
+    )
     rep.add_argument(
         "--seeds", type=int, default=None, help="fig6: layouts per gap width (default: 10)"
     )
@@ -88,8 +96,8 @@ def main(args: argparse.Namespace) -> int:
     out = check_output_path(args.out if args.out is not None else Path("runs") / args.what, "--out")
     if args.what == "table2":
         reproduce.check_problems(args.problems)
-    elif args.what == "fig6":
-        pass  # its settings are checked when it starts, before any case
+    elif args.what == "fig6" or args.what in reproduce.FIGURES:
+        pass  # nothing to check before --out
     else:
         from gaitnet_mpc.dataset.check import check_dataset
 
@@ -117,7 +125,9 @@ def main(args: argparse.Namespace) -> int:
         _check_folder(out, args.what, args.overwrite)
         write_status(out, command=command, state="running", todo=[args.what])
         try:
-            if args.what == "table2":
+            if args.what in reproduce.FIGURES:
+                report = reproduce.figure(out, args.what, quick=args.quick, video=not args.no_video)
+            elif args.what == "table2":
                 report = reproduce.table2(
                     out,
                     args.problems,

@@ -92,7 +92,8 @@ class KDWalkConfig:
     # the swing feedforward). With 0.05 the heel or toe overhung an edge and the foot
     # slid off it during stance (gap at dt 0.045 / 0.055 / 0.065: 1 violation each).
     # At most 0.09 m: a larger margin leaves no box on the shortest built-in stones (0.18 m
-    # long, seeded stepping-stones; terrain/builtin_courses.py).
+    # long, seeded stepping-stones; terrain/builtin_courses.py). The planar biped's point
+    # foot (radius 0.02 m) takes 0.025 m by the same rule (presets/kd-default.planar.toml).
     foothold_margin_m: float = bounded(
         0.08, "[0, 0.09] m", "a margin", "under half the shortest built-in stone, 0.18 m"
     )

@@ -69,6 +69,26 @@ def fig6(
     return out / "fig6.md"
 
 
+def figure(out: Path, name: str, *, quick: bool = False, video: bool = True) -> Path:
+    """Figs. 7, 8, 11 and 1(e) (``obstacle``): the humanoid's figures
+    (:mod:`~gaitnet_mpc.experiments.paper_figures`)."""
+    from gaitnet_mpc.experiments.paper_figures import reproduce_figure
+
+    return reproduce_figure(name, out, quick=quick, video=video)
+
+
+def _figure_artifacts() -> dict[str, tuple[str, ...]]:
+    from gaitnet_mpc.experiments.paper_figures import ARTIFACTS as FIGURE_ARTIFACTS
+
+    return dict(FIGURE_ARTIFACTS)
+
+
+def _figure_names() -> dict[str, str]:
+    from gaitnet_mpc.experiments.paper_figures import FIGURES
+
+    return dict(FIGURES)
+
+
 #: The files each one writes into its folder (what ``--overwrite`` may replace; a table2
 #: folder with its own files is resumed, not refused).
 ARTIFACTS: dict[str, tuple[str, ...]] = {
@@ -78,6 +98,7 @@ ARTIFACTS: dict[str, tuple[str, ...]] = {
         "cases.jsonl", "courses", "errors.log", "fig6.md", "fig6.csv", "fig6.png",
         "strip_kd.png", "strip_kd-optdt.png", "strip_gaitnet.png",
     ),
+    **_figure_artifacts(),
 }  # fmt: skip
 #: The ones that resume from what an earlier, interrupted run left in the folder.
 RESUMABLE = frozenset({"table2", "fig6"})
@@ -89,4 +110,7 @@ REPRODUCIBLE = {
     "table1": "Gait-Net feature spaces (Table I)",
     "table2": "solvers on the same MPC problems (Table II)",
     "fig6": "2-D biped over 5-15 cm gaps: fixed, optimised and Gait-Net dt (Fig. 6)",
+    **_figure_names(),
 }
+#: The humanoid's figures (:func:`figure`).
+FIGURES = frozenset(_figure_names())
