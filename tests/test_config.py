@@ -46,20 +46,27 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
     )
 
 
+def _default_walk_config(planar: bool) -> KDWalkConfig:
+    """The default preset: ``KDWalkConfig()``; on a planar robot with the biped's foothold
+    margin (its 0.02 m point foot + 5 mm, kd-default.planar.toml)."""
+    return replace(KDWalkConfig(), foothold_margin_m=0.025) if planar else KDWalkConfig()
+
+
 @pytest.mark.parametrize("planar", [False, True])
 def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> None:
     assert preset_names("kd") == ["default", "paper", "realtime"]
     assert preset_names("srbm") == ["default"]
-    assert load_preset(KDWalkConfig, "kd", "default", planar) == KDWalkConfig()
+    default = _default_walk_config(planar)
+    assert load_preset(KDWalkConfig, "kd", "default", planar) == default
     realtime = load_preset(KDWalkConfig, "kd", "realtime", planar)
-    assert realtime == replace(KDWalkConfig(), replan_j_max=1)
+    assert realtime == replace(default, replan_j_max=1)
     assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config_before(planar)
     assert load_preset(SRBMWalkConfig, "srbm", "default", planar) == SRBMWalkConfig()
 
 
 @pytest.mark.parametrize("planar", [False, True])
 def test_registry_configs_equal_todays(planar: bool) -> None:
-    assert controller_config("kd", planar) == KDWalkConfig()
+    assert controller_config("kd", planar) == _default_walk_config(planar)
     assert controller_config("kd", planar, preset="paper", preview=True) == preview_walk_config(
         _paper_walk_config_before(planar)
     )
