@@ -1,12 +1,17 @@
-"""The paper's 3-D figures (``experiments/paper_figures.py``): each quick figure writes its
-files (PNG, SVG, CSV, Markdown with a verdict and the machine line), and the physical facts
-of the quick runs that are robust hold (touchdowns on allowed patches, predictions that
-move with the measured momentum, a tracked command, swinging feet)."""
+"""The paper's 3-D figures (``experiments/paper_figures.py``) and ``reproduce all``
+(``experiments/reproduce_all.py``): one quick ``reproduce all`` runs every table and
+figure; each quick figure wrote its files (PNG, SVG, CSV, Markdown with a verdict and the
+machine line), the physical facts of the quick runs that are robust hold (touchdowns on
+allowed patches, predictions that move with the measured momentum, a tracked command,
+swinging feet, a cart pushed forward by the hands), and ``reproduction.md`` has a section
+for every table and figure of the paper."""
 
 from __future__ import annotations
 
 import csv
 import os
+import re
+import time
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -16,6 +21,7 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.experiments.figure_fig10 import CART_LOAD_KG
 from gaitnet_mpc.experiments.paper_figures import (
     ARTIFACTS,
     CSV_FIELDS,
@@ -24,6 +30,7 @@ from gaitnet_mpc.experiments.paper_figures import (
     VX_MPS,
     reproduce_figure,
 )
+from gaitnet_mpc.experiments.reproduce_all import ITEMS, SECTIONS, reproduce_all
 from gaitnet_mpc.machine import machine_info
 from gaitnet_mpc.results.rundir import load_run
 from gaitnet_mpc.terrain import load_course
@@ -31,31 +38,42 @@ from gaitnet_mpc.terrain import load_course
 pytestmark = pytest.mark.slow
 
 
-def _made(tmp_path_factory: pytest.TempPathFactory, name: str) -> Path:
-    out = tmp_path_factory.mktemp(name)
-    md = reproduce_figure(name, out, quick=True, video=False, log=lambda line: None)
-    assert md == out / f"{name}.md"
+@pytest.fixture(scope="module")
+def everything(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``reproduce all --quick`` into a fresh folder (its wall time is printed)."""
+    out = tmp_path_factory.mktemp("all")
+    lines: list[str] = []
+    t0 = time.perf_counter()
+    md = reproduce_all(out, quick=True, video=False, log=lines.append)
+    print(f"reproduce all --quick: {time.perf_counter() - t0:.0f} s")
+    assert md == out / "reproduction.md"
+    assert [line.split(":")[0] for line in lines if line.endswith("...")] == list(ITEMS)
     return out
 
 
 @pytest.fixture(scope="module")
-def fig7(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _made(tmp_path_factory, "fig7")
+def fig7(everything: Path) -> Path:
+    return everything / "fig7"
 
 
 @pytest.fixture(scope="module")
-def fig8(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _made(tmp_path_factory, "fig8")
+def fig8(everything: Path) -> Path:
+    return everything / "fig8"
 
 
 @pytest.fixture(scope="module")
-def fig11(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _made(tmp_path_factory, "fig11")
+def fig10(everything: Path) -> Path:
+    return everything / "fig10"
 
 
 @pytest.fixture(scope="module")
-def obstacle(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _made(tmp_path_factory, "obstacle")
+def fig11(everything: Path) -> Path:
+    return everything / "fig11"
+
+
+@pytest.fixture(scope="module")
+def obstacle(everything: Path) -> Path:
+    return everything / "obstacle"
 
 
 def _rows(out: Path, name: str) -> list[dict[str, str]]:
@@ -95,7 +113,7 @@ def _check_files(out: Path, name: str) -> str:
 
 # ----------------------------------------------------------------------------- names
 def test_figures_are_named_for_help() -> None:
-    assert set(FIGURES) == {"fig7", "fig8", "fig11", "obstacle"}
+    assert set(FIGURES) == {"fig7", "fig8", "fig10", "fig11", "obstacle"}
     assert all(isinstance(line, str) and line for line in FIGURES.values())
 
 
@@ -188,3 +206,56 @@ def test_obstacle_feet_swing_and_touch_down(obstacle: Path) -> None:
     assert any(r["over_obstacle"] == "1" for r in trace)  # 4 s reach the obstacle
     assert "clearance" in text and " cm" in text
     assert "obstacle_heights" in text  # the deviation from the paper is stated
+
+
+# ----------------------------------------------------------------------------- fig10
+def test_fig10_the_hands_push_the_cart_forward(fig10: Path) -> None:
+    text = _check_files(fig10, "fig10")
+    rows = _rows(fig10, "fig10")
+    assert {r["controller"] for r in rows} == {"srbm", "gaitnet"}
+    for controller in ("srbm", "gaitnet"):
+        mine = [r for r in rows if r["controller"] == controller]
+        t, com_x, cart_x, push = (
+            _floats(mine, k) for k in ("t_s", "com_x_m", "cart_x_m", "hand_push_n")
+        )
+        assert len(mine) >= 400  # 2.5 s, a row every 5 ms
+        run = load_run(fig10 / "runs" / f"{controller}-cart")
+        assert run.summary["cart"]["load_kg"] == CART_LOAD_KG  # recorded, not told
+        assert np.all(push >= 0.0)  # a frictionless plate pushes back, never pulls
+        assert push.max() > 10.0  # the hands touched it
+        assert np.all(np.diff(cart_x) >= -1e-3)  # Coulomb resistance: it never rolls back
+        if not run.summary["fell"]:
+            assert cart_x[-1] - cart_x[0] > 0.2  # pushed forward
+            assert np.all(cart_x > com_x)  # ahead of the robot, as a pushed cart is
+            since = _floats(mine, "t_since_contact_s")
+            assert np.allclose(since, t - (t[0] - since[0]))
+        no_cart = load_run(fig10 / "runs" / f"{controller}-no-cart")
+        assert no_cart.summary["cart"] is None
+    assert "not searched (quick)" in text
+    assert "struggles" in text and "torque headroom" in text
+
+
+# ----------------------------------------------------------------------------- all
+def test_reproduction_document_has_every_table_and_figure(everything: Path) -> None:
+    doc = (everything / "reproduction.md").read_text()
+    headings = re.findall(r"^## (.+)$", doc, flags=re.M)
+    assert headings == [s.title for s in SECTIONS]
+    for needed in ("Table I", "Table II", "Fig. 4", "Fig. 6", "Fig. 7", "Fig. 8", "Fig. 9",
+                   "Fig. 10", "Fig. 11"):  # fmt: skip
+        assert any(h.startswith(needed + ":") for h in headings), needed
+    for link in re.findall(r"!\[[^]]*\]\(([^)]+)\)", doc):
+        assert (everything / link).is_file(), link
+    assert "fig10/fig10.png" in doc and "table1/fig4.png" in doc
+    fig9 = doc.split("## Fig. 9")[1].split("\n## ")[0]
+    assert "no command yet" in fig9
+    for name in ITEMS:
+        assert (everything / name / f"{name}.md").is_file(), name
+    assert doc.count("holds") >= 5  # the figures' verdicts are carried over
+
+
+def test_reproduce_all_resumes_without_running_again(everything: Path) -> None:
+    lines: list[str] = []
+    before = (everything / "fig10" / "fig10.csv").stat().st_mtime_ns
+    reproduce_all(everything, quick=True, video=False, log=lines.append)
+    assert all("done earlier" in line for line in lines) and len(lines) == len(ITEMS)
+    assert (everything / "fig10" / "fig10.csv").stat().st_mtime_ns == before  # not re-run

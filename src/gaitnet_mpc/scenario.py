@@ -22,6 +22,7 @@ TOML layout of ``scenario.toml``::
     course_seed = 3              # "none": the built-in layout
     duration_s = 8.0
     payload_kg = 0.0
+    [cart]                       # optional: a cart the hands push (Fig. 10), see sim.cart
     [command]                    # vx_mps, vy_mps, yaw_rate_radps
     [[pushes]]                   # t_s, force_world_n = [fx, fy, fz], duration_s
     [origin]                     # how the settings were made (preset, --set, ...): a record
@@ -53,6 +54,7 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.robots import ROBOTS, RobotModel, load_robot
 from gaitnet_mpc.runner.episode import VideoConfig, run_episode
+from gaitnet_mpc.sim.cart import Cart
 from gaitnet_mpc.sim.disturbances import Push
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
 from gaitnet_mpc.terrain import BUILTIN_COURSES, SEEDED_COURSES, Course, load_course
@@ -81,6 +83,8 @@ class Scenario:
         duration_s: simulated time [s].
         pushes: forces at the trunk CoM (:class:`~gaitnet_mpc.sim.disturbances.Push`).
         payload_kg: mass on the trunk no controller is told about [kg].
+        cart: a cart ahead of the robot that its hands push, with a load no controller is
+            told about (:class:`~gaitnet_mpc.sim.cart.Cart`); None: no cart.
         config: the controller's full settings (a dataclass tree, e.g. ``KDWalkConfig``);
             None for a controller without settings. :func:`make_scenario` fills it.
         origin: how ``config`` was made (``preset``, ``config``, ``dt_s``, ``preview``,
@@ -95,6 +99,7 @@ class Scenario:
     duration_s: float = 10.0
     pushes: tuple[Push, ...] = ()
     payload_kg: float = 0.0
+    cart: Cart | None = None
     config: Any = None
     origin: tuple[tuple[str, Any], ...] = ()
 
@@ -112,6 +117,8 @@ class Scenario:
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
             raise ConfigError("course_seed", seed, "None or an integer >= 0")
         check_payload(self.payload_kg, field="payload_kg")
+        if self.cart is not None and not ROBOTS[self.robot].arm_joints:
+            raise ConfigError("cart", self.robot, "a robot with arms to push it (humanoid3d)")
         cls = config_type(self.controller)
         if cls is None and self.config is not None:
             raise ConfigError("config", type(self.config).__name__, f"None for {self.controller}")
@@ -129,6 +136,7 @@ class Scenario:
             "course_seed": configio.NONE if self.course_seed is None else self.course_seed,
             "duration_s": self.duration_s,
             "payload_kg": self.payload_kg,
+            **({} if self.cart is None else {"cart": self.cart.to_dict()}),
             "command": self.command.to_dict(),
             "pushes": [
                 {"t_s": p.t_s, "force_world_n": list(p.force_world_n), "duration_s": p.duration_s}
@@ -166,25 +174,11 @@ class Scenario:
             course = str(path if path.is_absolute() else base_dir / path)
         seed = data.get("course_seed", configio.NONE)
         command = Command(**_floats("command", data.get("command", {}), Command().to_dict()))
-        pushes = []
-        for i, raw in enumerate(_typed("pushes", data.get("pushes", []), list)):
-            p = _typed(f"pushes[{i}]", raw, dict)
-            if set(p) != {"t_s", "force_world_n", "duration_s"}:
-                raise ConfigError(f"pushes[{i}]", raw, "t_s, force_world_n, duration_s")
-            force = _typed(f"pushes[{i}].force_world_n", p["force_world_n"], list)
-            if len(force) != 3:
-                raise ConfigError(f"pushes[{i}].force_world_n", force, "[fx, fy, fz] in N")
-            pushes.append(
-                Push(
-                    t_s=_number(f"pushes[{i}].t_s", p["t_s"]),
-                    force_world_n=(
-                        _number(f"pushes[{i}].force_world_n", force[0]),
-                        _number(f"pushes[{i}].force_world_n", force[1]),
-                        _number(f"pushes[{i}].force_world_n", force[2]),
-                    ),
-                    duration_s=_number(f"pushes[{i}].duration_s", p["duration_s"]),
-                )
-            )
+        pushes = [
+            Push.from_table(raw, f"pushes[{i}]")
+            for i, raw in enumerate(_typed("pushes", data.get("pushes", []), list))
+        ]
+        cart = Cart(**_floats("cart", data["cart"], Cart().to_dict())) if "cart" in data else None
         origin = _typed("origin", data.get("origin", {}), dict)
         config = None
         cfg_cls = config_type(controller) if controller in CONTROLLERS else None
@@ -202,6 +196,7 @@ class Scenario:
             duration_s=_number("duration_s", data["duration_s"]),
             pushes=tuple(pushes),
             payload_kg=_number("payload_kg", data.get("payload_kg", 0.0)),
+            cart=cart,
             config=config,
             origin=tuple((k, None if v == configio.NONE else v) for k, v in origin.items()),
         )
@@ -248,6 +243,7 @@ def make_scenario(
     duration_s: float = 10.0,
     pushes: Sequence[Push] = (),
     payload_kg: float = 0.0,
+    cart: Cart | None = None,
     preset: str | None = None,
     config_file: str | Path | None = None,
     overrides: Sequence[str] = (),
@@ -258,12 +254,17 @@ def make_scenario(
     """A scenario whose controller settings are made as ``gaitnet-mpc run`` makes them:
     the preset (default "default"), ``config_file``, the flags (``preview``, ``dt_s``,
     ``gaitnet_weights``), then ``overrides`` (``KEY=VALUE``), see
-    :func:`~gaitnet_mpc.control.registry.controller_config`. Every input is checked here,
-    before anything is simulated (:class:`ConfigError` names the field)."""
+    :func:`~gaitnet_mpc.control.registry.controller_config`. With a ``cart``, a walking
+    controller holds its arms in the pushing pose (``low_level.arm_push = true``, before the
+    overrides): it knows that it pushes, not the load. Every input is checked here, before
+    anything is simulated (:class:`ConfigError` names the field)."""
     if robot not in ROBOTS:
         raise ConfigError("--robot", robot, f"one of {sorted(ROBOTS)}")
     if preview and controller not in KD_FAMILY:
         raise ConfigError("--preview", controller, f"one of {', '.join(KD_FAMILY)}")
+    cls = config_type(controller)
+    if cart is not None and cls is not None and "low_level" in {f.name for f in fields(cls)}:
+        overrides = ("low_level.arm_push=true", *overrides)
     config = controller_config(
         controller,
         ROBOTS[robot].planar,
@@ -296,6 +297,7 @@ def make_scenario(
         duration_s=duration_s,
         pushes=tuple(pushes),
         payload_kg=payload_kg,
+        cart=cart,
         config=config,
         origin=tuple(origin.items()),
     )
@@ -344,7 +346,10 @@ def build_episode(
     ctx = ControllerContext(robot, course, scenario.command, scenario.config)
     controller = make_controller(scenario.controller, ctx)
     sim_config = replace(
-        sim_config or SimConfig(), payload_kg=scenario.payload_kg, pushes=scenario.pushes
+        sim_config or SimConfig(),
+        payload_kg=scenario.payload_kg,
+        pushes=scenario.pushes,
+        cart=scenario.cart,
     )
     return Episode(scenario, robot, course, controller, Simulator(robot, course, sim_config))
 
@@ -360,11 +365,8 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
         )
     cmd = s.command
     if s.controller == "stand":
-        for flag, value in (
-            ("--vx", cmd.vx_mps),
-            ("--vy", cmd.vy_mps),
-            ("--yaw-rate", cmd.yaw_rate_radps),
-        ):
+        flags = ("--vx", "--vy", "--yaw-rate")
+        for flag, value in zip(flags, (cmd.vx_mps, cmd.vy_mps, cmd.yaw_rate_radps), strict=True):
             if value != 0.0:
                 out.append(f"{flag} {value:g} has no effect: the stand controller does not walk")
     origin = dict(s.origin)
@@ -380,6 +382,8 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
         for flag, value in (("--vy", cmd.vy_mps), ("--yaw-rate", cmd.yaw_rate_radps)):
             if value != 0.0:
                 out.append(f"{flag} {value:g} has no effect on the planar robot")
+    if s.cart is not None and not getattr(getattr(s.config, "low_level", None), "arm_push", 0):
+        out.append("the arms do not hold the pushing pose (low_level.arm_push): cart not held")
     for i, push in enumerate(s.pushes):
         if push in s.pushes[:i]:
             out.append(
@@ -412,6 +416,7 @@ def scenario_meta(episode: Episode, warnings: list[str]) -> dict[str, Any]:
             for p in s.pushes
         ],
         "payload_kg": s.payload_kg,
+        "cart": None if s.cart is None else s.cart.to_dict(),
         "seed": s.course_seed,
         "terrain_knowledge": episode.controller.terrain_knowledge(),
     }

@@ -52,11 +52,11 @@ def add_parser(sub: Any) -> None:
     rep.add_argument(
         "--quick",
         action="store_true",
-        help="fig6: one 10 cm layout, 3 s per method; fig7, fig8, fig11, obstacle: 2.5-4 s "
-        "runs without video (the test suite's)",
+        help="fig6: one 10 cm layout, 3 s per method; fig7, fig8, fig10, fig11, obstacle: "
+        "2.5-4 s runs without video, fig10 without its load search (the test suite's)",
     )
     rep.add_argument(
-        "--no-video", action="store_true", help="fig7, fig8, fig11, obstacle: no run videos"
+        "--no-video", action="store_true", help="fig7, fig8, fig10, fig11, obstacle: no videos"
     )
     rep.add_argument(
         "--seeds", type=int, default=None, help="fig6: layouts per gap width (default: 10)"
@@ -96,7 +96,7 @@ def main(args: argparse.Namespace) -> int:
     out = check_output_path(args.out if args.out is not None else Path("runs") / args.what, "--out")
     if args.what == "table2":
         reproduce.check_problems(args.problems)
-    elif args.what == "fig6" or args.what in reproduce.FIGURES:
+    elif args.what in ("fig6", "all") or args.what in reproduce.FIGURES:
         pass  # nothing to check before --out
     else:
         from gaitnet_mpc.dataset.check import check_dataset
@@ -127,6 +127,10 @@ def main(args: argparse.Namespace) -> int:
         try:
             if args.what in reproduce.FIGURES:
                 report = reproduce.figure(out, args.what, quick=args.quick, video=not args.no_video)
+            elif args.what == "all":
+                from gaitnet_mpc.experiments.reproduce_all import reproduce_all
+
+                report = reproduce_all(out, quick=args.quick, video=not args.no_video)
             elif args.what == "table2":
                 report = reproduce.table2(
                     out,

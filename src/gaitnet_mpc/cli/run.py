@@ -59,6 +59,7 @@ SCENARIO_DEFAULTS: dict[str, Any] = {
     "overrides": [],
     "push": [],
     "payload_kg": 0.0,
+    "cart_load_kg": None,
     "seed": None,
 }
 
@@ -184,6 +185,12 @@ def add_parser(sub: Any) -> None:
         f"(default: {d['payload_kg']})",
     )
     run.add_argument(
+        "--cart-load-kg",
+        type=float,
+        help="push a cart (Fig. 10) carrying this load [kg] that no controller is told about, "
+        "in [0, 350]; the arms hold the pushing pose; humanoid3d only (default: no cart)",
+    )
+    run.add_argument(
         "--seed",
         type=int,
         help="seed of a randomised layout of uneven, stepping-stones or gap (other courses: "
@@ -253,6 +260,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~gaitnet_mpc.scenario.Scenario` the options describe (``--scenario``:
     the file's, and then no other scenario option may be given)."""
     from gaitnet_mpc.scenario import MAX_DURATION_S, MIN_DURATION_S, Scenario, make_scenario
+    from gaitnet_mpc.sim.cart import Cart
     from gaitnet_mpc.sim.disturbances import Push
     from gaitnet_mpc.sim.simulator import check_payload
 
@@ -286,6 +294,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
         duration_s=v["duration"],
         pushes=tuple(Push.parse(p) for p in v["push"]),
         payload_kg=v["payload_kg"],
+        cart=None if v["cart_load_kg"] is None else Cart(load_kg=v["cart_load_kg"]),
         preset=v["preset"],
         config_file=v["config"],
         overrides=tuple(v["overrides"]),

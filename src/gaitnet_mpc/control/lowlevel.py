@@ -17,7 +17,9 @@
   ``tau += kp (psi - psi_cmd) + kd psi_dot`` holds the commanded heading. Measured with
   ``kd`` and its LIP lateral reference (feet 0.07 m beside the CoM, flat, 0.75 m/s, dt
   0.065, 4 s): trunk yaw rms 0.35 -> 0.10 rad with kp 10 N m/rad, kd 1 N m s/rad.
-* Arms: PD to the nominal pose with a counter-swing opposite to the hips.
+* Arms: PD to the nominal pose with a counter-swing opposite to the hips, or, with
+  ``arm_push``, to a still pushing pose (arms forward at shoulder height, for the cart of
+  Fig. 10). The controller knows the pose, not what the hands push against.
 """
 
 from __future__ import annotations
@@ -51,6 +53,15 @@ class LowLevelConfig:
     arm_kd_nms_per_rad: float = bounded(0.5, _KD, "a damping", _KD_REASON)
     # the arm's shoulder pitch swings by this fraction of the other leg's hip pitch [-]
     arm_counter_swing: float = bounded(0.6, "[0, 2]", "a ratio", "0: arms still; 2: twice the hip")
+    # hold the arms still in the pushing pose below instead of swinging them
+    arm_push: bool = False
+    arm_push_shoulder_pitch_rad: float = bounded(
+        -1.35, "[-2.6, 2.6] rad", "a shoulder pitch", "the joint's range; -pi/2: arm forward"
+    )
+    arm_push_elbow_rad: float = bounded(-0.3, "[-2.2, 0] rad", "an elbow angle", "its range")
+    # the pose's stiffness: 30 N at the hands (0.3 m from the shoulder) within 0.05 rad
+    arm_push_kp_nm_per_rad: float = bounded(180.0, _KP, "a stiffness", _KP_REASON)
+    arm_push_kd_nms_per_rad: float = bounded(3.0, _KD, "a damping", _KD_REASON)
     # time step of the swing IK's lookahead (the feedforward divides by its square) [s]
     ik_lookahead_s: float = bounded(0.005, "(0, 0.1] s", "a lookahead", "0.1 s: half a step")
     # fraction of the swing legs' inertial feedforward [-]
@@ -79,6 +90,7 @@ class LowLevelController:
         self.shoulder_pitch = {
             f: names.index(f"{f}_shoulder_pitch") for f in FEET if robot.spec.arm_joints
         }
+        self.elbow = {f: names.index(f"{f}_elbow") for f in FEET if robot.spec.arm_joints}
         self.hip_pitch = {f: names.index(f"{f}_hip_pitch") for f in FEET}
 
     def torques(
@@ -157,12 +169,17 @@ class LowLevelController:
         if self.arm_index.size:
             q_arm = self.q_nominal.copy()
             for side, other in (("left", "right"), ("right", "left")):
+                if c.arm_push:
+                    q_arm[self.shoulder_pitch[side]] = c.arm_push_shoulder_pitch_rad
+                    q_arm[self.elbow[side]] = c.arm_push_elbow_rad
+                    continue
                 swing = qj[self.hip_pitch[other]] - self.q_nominal[self.hip_pitch[other]]
                 q_arm[self.shoulder_pitch[side]] += c.arm_counter_swing * swing
             idx = self.arm_index
-            tau[idx] = (
-                c.arm_kp_nm_per_rad * (q_arm[idx] - qj[idx])
-                - c.arm_kd_nms_per_rad * qdj[idx]
-                + gravity[idx]
+            kp, kd = (
+                (c.arm_push_kp_nm_per_rad, c.arm_push_kd_nms_per_rad)
+                if c.arm_push
+                else (c.arm_kp_nm_per_rad, c.arm_kd_nms_per_rad)
             )
+            tau[idx] = kp * (q_arm[idx] - qj[idx]) - kd * qdj[idx] + gravity[idx]
         return np.clip(tau, -r.torque_limit_nm, r.torque_limit_nm)

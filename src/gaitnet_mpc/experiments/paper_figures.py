@@ -1,4 +1,4 @@
-"""The paper's 3-D humanoid figures (Figs. 7, 8, 11 and 1(e)), one results folder each.
+"""The paper's 3-D humanoid figures (Figs. 7, 8, 10, 11 and 1(e)), one results folder each.
 
 :func:`reproduce_figure` runs the figure's episodes (``humanoid3d``, each a full run folder
 under ``<out>/runs/<label>``, video included unless ``video=False``), reads them back with
@@ -6,14 +6,16 @@ under ``<out>/runs/<label>``, video included unless ``video=False``), reads them
 (the figure in the paper's layout), ``<name>.csv`` (the plotted data) and ``<name>.md``
 (our numbers beside the paper's number or claim, a verdict "holds" / "does not hold" with
 its rule, the machine line and the wall time). No controller setting is changed for a
-figure: every run uses the default settings, as ``gaitnet-mpc run`` would; ``kd`` runs at
+figure: every run uses the default settings, as ``gaitnet-mpc run`` would (with a cart,
+Fig. 10, the arms hold the pushing pose, as ``run --cart-load-kg`` sets); ``kd`` runs at
 the fixed dt of the README's headline ``kd`` row,
 :data:`~gaitnet_mpc.experiments.figure_common.KD_DT_S`. A run that falls is reported with
 its fall time, and its verdict is "does not hold".
 
 One module per figure, each with its episodes, drawing, table and verdict rule in its
 docstring: ``fig7`` (3-D stepping stones) :mod:`~gaitnet_mpc.experiments.figure_fig7`,
-``fig8`` (spatial momenta) :mod:`~gaitnet_mpc.experiments.figure_fig8`, ``fig11``
+``fig8`` (spatial momenta) :mod:`~gaitnet_mpc.experiments.figure_fig8`, ``fig10``
+(pushing a cart with an unknown load) :mod:`~gaitnet_mpc.experiments.figure_fig10`, ``fig11``
 (velocity tracking over a 20 cm gap) :mod:`~gaitnet_mpc.experiments.figure_fig11` and
 ``obstacle`` (Fig. 1(e)) :mod:`~gaitnet_mpc.experiments.figure_obstacle`; what they share
 (the episode runner, the report writer, the CSV columns :data:`CSV_FIELDS`) is in
@@ -22,9 +24,9 @@ figure names (:data:`FIGURES`), their files (:data:`ARTIFACTS`), the durations a
 :func:`reproduce_figure`; it re-exports the figure modules' public names.
 
 ``quick=True``: :data:`QUICK_DURATION_S` of simulated time per episode and no video (all
-four figures in well under a minute on two cores). The video and the snapshot strip render
-offscreen: without a display, ``MUJOCO_GL=egl`` must be set before MuJoCo is first
-imported (``gaitnet-mpc`` sets it). :func:`reproduce_figure` checks
+five figures in about a minute on two cores; ``fig10`` skips its load search). The video
+and the snapshot strip render offscreen: without a display, ``MUJOCO_GL=egl`` must be set
+before MuJoCo is first imported (``gaitnet-mpc`` sets it). :func:`reproduce_figure` checks
 ``out`` but takes no lock on it: the caller (the CLI) holds the folder's lock, as it does
 for ``table1`` and ``table2``; :data:`ARTIFACTS` lists what each figure writes there.
 """
@@ -62,6 +64,15 @@ from gaitnet_mpc.experiments.figure_fig8 import (
     momentum_pairs,
     prediction_errors,
 )
+from gaitnet_mpc.experiments.figure_fig10 import (
+    CART_LOAD_KG,
+    HEADROOM_MAX,
+    PUSH_DISTANCE_M,
+    VX_CART_MPS,
+    CartRecorder,
+    build_fig10,
+    largest_load,
+)
 from gaitnet_mpc.experiments.figure_fig11 import (
     RMSE_AFTER_S,
     SPEED_RMSE_MAX_MPS,
@@ -78,18 +89,19 @@ from gaitnet_mpc.runner.episode import VideoConfig
 FIGURES: dict[str, str] = {
     "fig7": "humanoid over the 3-D stepping stones: snapshots, touchdowns, CoM regions (Fig. 7)",
     "fig8": "spatial momenta, measured vs MPC-predicted, gaitnet and kd (Fig. 8)",
+    "fig10": "pushing a cart with an unknown 35 kg load, srbm and gaitnet; largest load (Fig. 10)",
     "fig11": "x-velocity tracking over a 20 cm gap, gaitnet and kd (Fig. 11)",
     "obstacle": "over a 3 cm obstacle and a 15 cm hole: swing-foot clearance (Fig. 1(e))",
 }
+_EXTRA = {"fig7": ("fig7_strip.png",), "fig10": ("fig10_loads.jsonl",)}
 #: What each figure writes into its folder (what an ``--overwrite`` may replace).
 ARTIFACTS: dict[str, tuple[str, ...]] = {
-    name: (f"{name}.md", f"{name}.csv", f"{name}.png", f"{name}.svg", "runs")
-    + (("fig7_strip.png",) if name == "fig7" else ())
+    name: (f"{name}.md", f"{name}.csv", f"{name}.png", f"{name}.svg", "runs", *_EXTRA.get(name, ()))
     for name in FIGURES
 }
 #: Simulated time per episode [s], full and quick.
-DURATION_S = {"fig7": 8.0, "fig8": 8.0, "fig11": 8.0, "obstacle": 8.0}
-QUICK_DURATION_S = {"fig7": 2.5, "fig8": 2.5, "fig11": 3.0, "obstacle": 4.0}
+DURATION_S = {"fig7": 8.0, "fig8": 8.0, "fig10": 16.0, "fig11": 8.0, "obstacle": 8.0}
+QUICK_DURATION_S = {"fig7": 2.5, "fig8": 2.5, "fig10": 2.5, "fig11": 3.0, "obstacle": 4.0}
 
 
 def _stderr(line: str) -> None:
@@ -129,20 +141,24 @@ def reproduce_figure(
 _BUILDERS: dict[str, Callable[[Path, float, VideoConfig | None, Log, bool], Report]] = {
     "fig7": build_fig7,
     "fig8": build_fig8,
+    "fig10": build_fig10,
     "fig11": build_fig11,
     "obstacle": build_obstacle,
 }
 
 __all__ = [
     "ARTIFACTS",
+    "CART_LOAD_KG",
     "CONTROLLER_COLORS",
     "CSV_EVERY_TICKS",
     "CSV_FIELDS",
     "DURATION_S",
     "FIGURES",
+    "HEADROOM_MAX",
     "KD_DT_S",
     "MOMENTA",
     "NRMSE_MAX",
+    "PUSH_DISTANCE_M",
     "QUICK_DURATION_S",
     "REGION_COLORS",
     "RMSE_AFTER_S",
@@ -150,11 +166,14 @@ __all__ = [
     "SNAPSHOT_PERIOD_S",
     "SOLE_SAMPLES",
     "SPEED_RMSE_MAX_MPS",
+    "VX_CART_MPS",
     "VX_MPS",
     "VX_OBSTACLE_MPS",
+    "CartRecorder",
     "FootRecorder",
     "Log",
     "com_region",
+    "largest_load",
     "momentum_pairs",
     "prediction_errors",
     "ramped_command",

@@ -70,7 +70,7 @@ def fig6(
 
 
 def figure(out: Path, name: str, *, quick: bool = False, video: bool = True) -> Path:
-    """Figs. 7, 8, 11 and 1(e) (``obstacle``): the humanoid's figures
+    """Figs. 7, 8, 10, 11 and 1(e) (``obstacle``): the humanoid's figures
     (:mod:`~gaitnet_mpc.experiments.paper_figures`)."""
     from gaitnet_mpc.experiments.paper_figures import reproduce_figure
 
@@ -100,8 +100,12 @@ ARTIFACTS: dict[str, tuple[str, ...]] = {
     ),
     **_figure_artifacts(),
 }  # fmt: skip
+#: What ``reproduce all`` (:mod:`~gaitnet_mpc.experiments.reproduce_all`) runs, in this
+#: order, each into a folder of its name.
+ALL_ITEMS = ("table1", "table2", "fig6", "fig7", "fig8", "fig10", "fig11", "obstacle")
+ARTIFACTS["all"] = (*ALL_ITEMS, "reproduction.md")
 #: The ones that resume from what an earlier, interrupted run left in the folder.
-RESUMABLE = frozenset({"table2", "fig6"})
+RESUMABLE = frozenset({"table2", "fig6", "fig10", "all"})
 #: Most recorded problems of table2 (the paper's table is over 100; each is ~1 s to record).
 MAX_PROBLEMS = 10_000
 
@@ -111,6 +115,7 @@ REPRODUCIBLE = {
     "table2": "solvers on the same MPC problems (Table II)",
     "fig6": "2-D biped over 5-15 cm gaps: fixed, optimised and Gait-Net dt (Fig. 6)",
     **_figure_names(),
+    "all": "every table and figure above, then reproduction.md (resumable)",
 }
 #: The humanoid's figures (:func:`figure`).
 FIGURES = frozenset(_figure_names())

@@ -85,6 +85,24 @@ class Push:
         force = (values.get("fx", 0.0), values.get("fy", 0.0), values.get("fz", 0.0))
         return cls(t_s=values["t"], force_world_n=force, duration_s=values["dur"])
 
+    @classmethod
+    def from_table(cls, raw: object, key: str) -> Push:
+        """The push of a ``[[pushes]]`` entry of ``scenario.toml`` (``t_s``,
+        ``force_world_n = [fx, fy, fz]``, ``duration_s``); ``key`` names it in errors."""
+        if not isinstance(raw, dict) or set(raw) != {"t_s", "force_world_n", "duration_s"}:
+            raise ConfigError(key, raw, "a table with t_s, force_world_n, duration_s")
+        force = raw["force_world_n"]
+        if not isinstance(force, list) or len(force) != 3:
+            raise ConfigError(f"{key}.force_world_n", force, "[fx, fy, fz] in N")
+        for name, value in (("t_s", raw["t_s"]), ("duration_s", raw["duration_s"])):
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ConfigError(f"{key}.{name}", value, "a number")
+        for value in force:
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ConfigError(f"{key}.force_world_n", value, "a number")
+        fx, fy, fz = (float(v) for v in force)
+        return cls(float(raw["t_s"]), (fx, fy, fz), float(raw["duration_s"]))
+
 
 def protocol_pushes(
     seed: int,

@@ -18,6 +18,7 @@ import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.sim.cart import CART_JOINT, CART_PLATE, Cart, cart_xml
 from gaitnet_mpc.sim.disturbances import Push
 from gaitnet_mpc.state import RobotState
 from gaitnet_mpc.terrain import Course, course_geoms_xml
@@ -87,6 +88,7 @@ class SimConfig:
         payload_kg: mass added to the trunk at its CoM that no controller is told about
             [kg], in [0, 50] (and at most the robot's own mass, checked by the simulator).
         pushes: impulses applied at the trunk CoM.
+        cart: a cart ahead of the robot that its hands can push (Fig. 10); None: no cart.
         fall_com_height_ratio: a fall is declared when the CoM height above the start ground
             drops below this fraction of its nominal standing height.
         fall_tilt_rad: a fall is declared when the trunk's z axis tilts more than this.
@@ -106,6 +108,7 @@ class SimConfig:
     timestep_s: float = 0.001
     payload_kg: float = 0.0
     pushes: tuple[Push, ...] = ()
+    cart: Cart | None = None
     fall_com_height_ratio: float = 0.5
     fall_tilt_rad: float = 1.0
     touchdown_min_air_s: float = 0.03
@@ -184,11 +187,26 @@ class SelfCollisionStats:
         }
 
 
-def build_scene_xml(robot: RobotModel, course: Course) -> str:
-    """The robot's MJCF with the course's geoms, a light and a skybox added."""
+def hand_geoms(robot: RobotModel) -> tuple[str, ...]:
+    """The geoms a robot pushes with (its forearms); raises :class:`ConfigError` for a robot
+    without arms."""
+    if not robot.spec.arm_joints:
+        raise ConfigError("cart", robot.name, "a robot with arms (humanoid3d)")
+    return tuple(f"{f}_forearm" for f in FEET)
+
+
+def build_scene_xml(robot: RobotModel, course: Course, cart: Cart | None = None) -> str:
+    """The robot's MJCF with the course's geoms, a light, a skybox and the cart added."""
     xml = robot.spec.mjcf_path.read_text()
     xml = re.sub(r"(<mujoco[^>]*>)", r"\1" + _VISUAL_XML, xml, count=1)
-    return xml.replace("<worldbody>", "<worldbody>" + _SCENE_XML + course_geoms_xml(course), 1)
+    xml = xml.replace("<worldbody>", "<worldbody>" + _SCENE_XML + course_geoms_xml(course), 1)
+    if cart is not None:  # after the robot: its qpos and qvel come after the robot's
+        x0, y0 = course.start_xy
+        ground = course.ground_height_at(x0, y0) or 0.0
+        body, contact = cart_xml(cart, (x0, y0, ground), hand_geoms(robot))
+        xml = xml.replace("</worldbody>", body + "</worldbody>", 1)
+        xml = xml.replace("</mujoco>", contact + "</mujoco>", 1)
+    return xml
 
 
 @dataclass
@@ -201,7 +219,8 @@ class Simulator:
 
     def __post_init__(self) -> None:
         check_payload(self.config.payload_kg, self.robot.total_mass_kg)
-        self.model = mujoco.MjModel.from_xml_string(build_scene_xml(self.robot, self.course))
+        cart = self.config.cart
+        self.model = mujoco.MjModel.from_xml_string(build_scene_xml(self.robot, self.course, cart))
         self.model.opt.timestep = self.config.timestep_s
         trunk = self.model.body(self.robot.spec.trunk_body).id
         self.model.body_mass[trunk] += self.config.payload_kg
@@ -218,8 +237,13 @@ class Simulator:
         self._foot_sites = {f: m.site(self.robot.spec.foot_sites[f]).id for f in FEET}
         # _contacts() of the data, keyed by the time and qpos it was read at
         self._contact_cache: tuple[bytes, _Contacts] | None = None
-        #: geom id -> whether it belongs to the robot (its body is not the world body)
-        self._robot_geom = m.geom_bodyid != 0
+        #: geom id -> whether it belongs to the robot (its body hangs from the trunk)
+        self._robot_geom = m.body_rootid[m.geom_bodyid] == trunk
+        self._cart_plate = m.geom(CART_PLATE).id if cart is not None else -1
+        slide = m.joint(CART_JOINT).id if cart is not None else -1
+        self._cart_adr = (int(m.jnt_qposadr[slide]), int(m.jnt_dofadr[slide]))
+        #: the robot's own coordinates (the cart's slide joint, if any, comes after them)
+        self._nq, self._nv = self.robot.mj_model.nq, self.robot.mj_model.nv
         self._body_names = [m.body(b).name for b in range(m.nbody)]
         self._act_limit = m.actuator_ctrlrange[:, 1].copy()
         r = self.robot
@@ -245,7 +269,7 @@ class Simulator:
         mujoco.mj_resetData(self.model, self.data)
         x0, y0 = self.course.start_xy
         ground = self.course.ground_height_at(x0, y0) or 0.0
-        self.data.qpos[:] = (
+        self.data.qpos[: self._nq] = (
             self.robot.standing_qpos(x0, y0, ground) if qpos is None else np.asarray(qpos)
         )
         mujoco.mj_forward(self.model, self.data)
@@ -459,6 +483,27 @@ class Simulator:
             )
         )
 
+    def cart_reading(self) -> tuple[float, float, np.ndarray]:
+        """The cart's x position of its plate's rear face [m], its speed [m/s], and the
+        force the plate puts on the hands (world frame, (3,)) [N]; needs ``config.cart``."""
+        cart = self.config.cart
+        if cart is None:
+            raise ConfigError("cart", None, "a simulator made with SimConfig(cart=...)")
+        m, d = self.model, self.data
+        force = np.zeros(3)
+        c6 = np.zeros(6)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            if self._cart_plate not in (con.geom1, con.geom2):
+                continue
+            mujoco.mj_contactForce(m, d, i, c6)
+            # force on geom2 from geom1 is +frame normal; the hand is the other geom
+            f_world = con.frame.reshape(3, 3).T @ c6[:3]
+            force += f_world if con.geom1 == self._cart_plate else -f_world
+        x0 = self.course.start_xy[0] + cart.plate_ahead_m
+        q_adr, v_adr = self._cart_adr
+        return x0 + float(d.qpos[q_adr]), float(d.qvel[v_adr]), force
+
     def _site_yaw(self, site_id: int) -> float:
         x_axis = self.data.site_xmat[site_id].reshape(3, 3)[:, 0]
         return float(np.arctan2(x_axis[1], x_axis[0]))
@@ -479,8 +524,8 @@ class Simulator:
         mass = float(m.body_subtreemass[root])
         return RobotState(
             t_s=float(d.time),
-            qpos=d.qpos.copy(),
-            qvel=d.qvel.copy(),
+            qpos=d.qpos[: self._nq].copy(),
+            qvel=d.qvel[: self._nv].copy(),
             base_pos_world_m=p_base,
             base_rot_world=rot,
             base_lin_vel_world_mps=v_base,
