@@ -244,3 +244,34 @@ def test_wbd_sqp_converges_to_a_feasible_plan(
     feet1 = np.asarray(kinematics.feet(res.qpos[1])).T
     i = int(np.argmax(p.cd.contact[0]))
     np.testing.assert_allclose(feet1[i, 2], feet0[i, 2], atol=2e-3)
+
+
+def test_wbd_step_test_measures_foot_wrenches(
+    kinematics: SymbolicKinematics, joint_problem: JointSpaceProblem
+) -> None:
+    """WBD-SQP's step test sees the quantities CD-SQP and KD-SQP test: per stage and foot
+    the sum of the contact-point forces and their moment about the foot centre."""
+    from gaitnet_mpc.robots import FEET
+    from gaitnet_mpc.table2.wbd_sqp import GROUPS
+
+    assert GROUPS == ("position", "force", "moment", "dt")
+    solver = WBDSQP(kinematics, sqp=JOINT_SQP)
+    p = joint_problem
+    x = solver.guess(p)
+    rng = np.random.default_rng(0)
+    h, d = p.horizon, kinematics.dyn
+    for k in range(h):  # arbitrary forces on every point
+        x[solver._slices(k)["lam"]] = rng.normal(size=3 * solver.nc) * 100.0
+    f_feet, t_feet = solver._foot_wrench_function(h)(x, p.qpos0)
+    f_feet = np.asarray(f_feet).reshape(h, 2, 3)
+    t_feet = np.asarray(t_feet).reshape(h, 2, 3)
+    for k in (0, h - 1):
+        q = p.qpos0 if k == 0 else x[solver._slices(k - 1)["q"]]
+        pts = np.asarray(d.contact_kinematics(q, np.zeros(solver.nv))[0])
+        centres = np.asarray(kinematics.feet(q))
+        lam = x[solver._slices(k)["lam"]].reshape(-1, 3)
+        for i, foot in enumerate(FEET):
+            idx = d.contact_points_of(foot)
+            np.testing.assert_allclose(f_feet[k, i], lam[idx].sum(axis=0), atol=1e-9)
+            moment = sum(np.cross(pts[:, c] - centres[:, i], lam[c]) for c in idx)
+            np.testing.assert_allclose(t_feet[k, i], moment, atol=1e-9)

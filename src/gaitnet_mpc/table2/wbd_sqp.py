@@ -25,6 +25,12 @@ lift-off and touchdown heights); joint and torque limits; ``dt`` in Table VI's r
 
 Cost: eq. 2 with Table VI's weights towards the kd reference ``q_ref, qdot_ref`` (the
 trunk position included: the kd reference's trunk path, which carries its CoM path).
+
+Step test (:mod:`~gaitnet_mpc.table2.sqp_common`): the quantities CD-SQP and explicit
+KD-SQP test, measured from the iterate: CoM and foot centres, each foot's force (the sum
+of its contact-point forces) and moment about its centre, and dt (:data:`GROUPS`).
+``foot_wrench_test=False`` tests each contact point's force instead and no moment (the
+test before 2026-12: :data:`POINT_GROUPS`).
 """
 
 from __future__ import annotations
@@ -41,8 +47,11 @@ from gaitnet_mpc.table2.joint_space import DT_BOUNDS_S, JointSpaceProblem, Symbo
 from gaitnet_mpc.table2.kd_sqp import JointSQPResult, foot_events, rotation_error
 from gaitnet_mpc.table2.sqp_common import SQPConfig, build_sqp, objective_and_violation, run_sqp
 
-#: Step-test groups: CoM and foot centres [m], contact-point forces [N], dt [s].
-GROUPS = ("position", "force", "dt")
+#: Step-test groups: CoM and foot centres [m], foot forces [N] and moments [N m] (from
+#: the contact-point forces: the quantities CD-SQP and explicit KD-SQP test), dt [s].
+GROUPS = ("position", "force", "moment", "dt")
+#: The groups of the contact-point test (``foot_wrench_test=False``): each point's force.
+POINT_GROUPS = ("position", "force", "dt")
 
 
 def swing_profile(contact: np.ndarray, stages_per_step: int, first_partial: bool) -> np.ndarray:
@@ -72,10 +81,12 @@ class WBDSQP:
         kinematics: SymbolicKinematics,
         config: WBConfig | None = None,
         sqp: SQPConfig | None = None,
+        foot_wrench_test: bool = True,
     ) -> None:
         self.kin = kinematics
         self.config = config or WBConfig()
         self.sqp = sqp or SQPConfig()
+        self.foot_wrench_test = foot_wrench_test
         d = kinematics.dyn
         self.nq, self.nv, self.nj, self.nc = d.nq, d.nv, d.n_joints, d.n_contacts
         self.nw = self.nq + 2 * self.nv + self.nj + 3 * self.nc
@@ -181,11 +192,22 @@ class WBDSQP:
             [ca.vertcat(*[ca.vertcat(kin.com(q), ca.vec(kin.feet(q))) for q in qs[1:]])],
         )
         lam_cols = np.concatenate([np.arange(h * nw)[self._slices(k)["lam"]] for k in range(h)])
+        wrench_fun = self._foot_wrench_function(h)
+        # the measured state of the problem being solved and the test (set by ``solve``)
+        state: dict[str, Any] = {"qpos0": np.zeros(nq), "foot_wrench_test": True}
 
         def measure(x: np.ndarray) -> dict[str, np.ndarray]:
+            if not state["foot_wrench_test"]:
+                return {
+                    "position": np.asarray(positions(x)).ravel(),
+                    "force": x[lam_cols],
+                    "dt": x[nw * h :],
+                }
+            f_feet, t_feet = wrench_fun(x, state["qpos0"])
             return {
                 "position": np.asarray(positions(x)).ravel(),
-                "force": x[lam_cols],
+                "force": np.asarray(f_feet).ravel(),
+                "moment": np.asarray(t_feet).ravel(),
                 "dt": x[nw * h :],
             }
 
@@ -197,9 +219,39 @@ class WBDSQP:
             "rows": [(r[1], r[2], r[3]) for r in rows],
             "used": used,
             "g_fun": ca.Function("wbd_g", [w, params], [g, cost]),
+            "state": state,
         }
         self._cache[key] = entry
         return entry
+
+    def _foot_wrench_function(self, h: int) -> Any:
+        """``(w, qpos0) -> (F, T)``, (6 h,) each: per stage ``k`` and foot, the sum of its
+        contact-point forces and their moment about the foot centre ``p_f(q_k)`` (the
+        point explicit KD-SQP's ``tau`` refers to), at the stage's configuration."""
+        d, nq, nw = self.kin.dyn, self.nq, self.nw
+        w = ca.SX.sym("w", nw * h)
+        qpos0 = ca.SX.sym("qpos0", nq)
+        qs = [qpos0] + [w[self._slices(k)["q"]] for k in range(h - 1)]
+        forces, moments = [], []
+        for k in range(h):
+            lam = w[self._slices(k)["lam"]]
+            pts, _ = d.contact_kinematics(qs[k], ca.SX.zeros(self.nv))
+            centres = self.kin.feet(qs[k])
+            for i, foot in enumerate(FEET):
+                f_i, t_i = ca.SX.zeros(3), ca.SX.zeros(3)
+                for c in d.contact_points_of(foot):
+                    lam_c = lam[3 * c : 3 * c + 3]
+                    f_i += lam_c
+                    t_i += ca.cross(pts[:, c] - centres[:, i], lam_c)
+                forces.append(f_i)
+                moments.append(t_i)
+        out = [ca.vertcat(*forces), ca.vertcat(*moments)]
+        fun = ca.Function("wbd_foot_wrench", [w, qpos0], out, {"cse": True})
+
+        def wrench(x_all: np.ndarray, q0: np.ndarray) -> tuple[Any, Any]:
+            return fun(x_all[: nw * h], q0)
+
+        return wrench
 
     def _arguments(self, p: JointSpaceProblem, entry: dict[str, Any]) -> dict[str, Any]:
         cd, h, nw = p.cd, p.horizon, self.nw
@@ -285,7 +337,10 @@ class WBDSQP:
         ``feasibility_tol``."""
         entry = self._build(p)
         args = self._arguments(p, entry)
-        run = run_sqp(entry["solver"], entry["test"], self.sqp, GROUPS, args)
+        entry["state"]["qpos0"] = np.asarray(p.qpos0, dtype=float)
+        entry["state"]["foot_wrench_test"] = self.foot_wrench_test
+        groups = GROUPS if self.foot_wrench_test else POINT_GROUPS
+        run = run_sqp(entry["solver"], entry["test"], self.sqp, groups, args)
         obj, viol = self.evaluate(p, run.x)
         h, nw = p.horizon, self.nw
         z = run.x[: nw * h].reshape(h, nw)
@@ -306,4 +361,4 @@ class WBDSQP:
         )
 
 
-__all__ = ["GROUPS", "WBDSQP", "swing_profile"]
+__all__ = ["GROUPS", "POINT_GROUPS", "WBDSQP", "swing_profile"]
