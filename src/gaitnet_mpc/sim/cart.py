@@ -14,15 +14,14 @@ the robot geoms' ``contype``); the terrain does not touch the cart.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 
 #: Gravity used for the rolling-resistance force [m/s^2].
 _G_MPS2 = 9.81
-#: Largest cart load accepted [kg]: 10x the paper's 35 kg, far beyond what the 16 kg
-#: humanoid's friction on the floor lets it push.
+#: Largest cart load accepted [kg] (:attr:`Cart.load_kg`'s range): 10x the paper's 35 kg.
 MAX_CART_LOAD_KG = 350.0
 
 #: Half sizes of the push plate (x thickness, y width, z height) and of the cart's body [m].
@@ -48,25 +47,18 @@ class Cart:
             humanoid's shoulders stand at about 0.7 m).
     """
 
-    load_kg: float = 35.0
-    cart_mass_kg: float = 5.0
-    rolling_resistance: float = 0.01
-    damping_ns_per_m: float = 2.0
-    plate_ahead_m: float = 0.37
-    plate_height_m: float = 0.68
+    load_kg: float = bounded(35.0, "[0, 350] kg", "a load", "10x the paper's 35 kg")
+    cart_mass_kg: float = bounded(5.0, "[0.5, 100] kg", "a mass", "a hand cart's")
+    rolling_resistance: float = bounded(0.01, "[0, 0.5]", "a coefficient", "wheels, not skids")
+    damping_ns_per_m: float = bounded(2.0, "[0, 1000] N s/m", "a damping", "a rail's")
+    plate_ahead_m: float = bounded(0.37, "[0.2, 2] m", "a distance", "beyond the feet's reach")
+    plate_height_m: float = bounded(0.68, "[0.2, 1.5] m", "a height", "within the arms' reach")
 
     def __post_init__(self) -> None:
-        checks = (
-            ("cart.load_kg", self.load_kg, 0.0, MAX_CART_LOAD_KG, "a load in [0, 350] kg"),
-            ("cart.cart_mass_kg", self.cart_mass_kg, 0.5, 100.0, "a mass in [0.5, 100] kg"),
-            ("cart.rolling_resistance", self.rolling_resistance, 0.0, 0.5, "c_rr in [0, 0.5]"),
-            ("cart.damping_ns_per_m", self.damping_ns_per_m, 0.0, 1000.0, "[0, 1000] N s/m"),
-            ("cart.plate_ahead_m", self.plate_ahead_m, 0.2, 2.0, "a distance in [0.2, 2] m"),
-            ("cart.plate_height_m", self.plate_height_m, 0.2, 1.5, "a height in [0.2, 1.5] m"),
-        )
-        for name, value, lo, hi, expected in checks:
-            if not (isinstance(value, int | float) and math.isfinite(value) and lo <= value <= hi):
-                raise ConfigError(name, value, expected)
+        try:
+            check_ranges(self)
+        except ConfigError as exc:
+            raise ConfigError(f"cart.{exc.field}", exc.value, exc.expected) from None
 
     @property
     def mass_kg(self) -> float:
