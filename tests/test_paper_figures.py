@@ -116,7 +116,7 @@ def _check_files(out: Path, name: str) -> str:
 
 # ----------------------------------------------------------------------------- names
 def test_figures_are_named_for_help() -> None:
-    assert set(FIGURES) == {"fig7", "fig8", "fig10", "fig11", "obstacle"}
+    assert set(FIGURES) == {"fig7", "fig8", "fig9", "fig10", "fig11", "obstacle"}
     assert all(isinstance(line, str) and line for line in FIGURES.values())
 
 
@@ -248,9 +248,9 @@ def test_reproduction_document_has_every_table_and_figure(everything: Path) -> N
         assert any(h.startswith(needed + ":") for h in headings), needed
     for link in re.findall(r"!\[[^]]*\]\(([^)]+)\)", doc):
         assert (everything / link).is_file(), link
-    assert "fig10/fig10.png" in doc and "table1/fig4.png" in doc
-    fig9 = doc.split("## Fig. 9")[1].split("\n## ")[0]
-    assert "no command yet" in fig9
+    assert "fig10/fig10.png" in doc and "table1/fig4.png" in doc and "fig9/fig9.png" in doc
+    fig4 = doc.split("## Fig. 4")[1].split("\n## ")[0]
+    assert "drawn by Table I" in fig4
     for name in ITEMS:
         assert (everything / name / f"{name}.md").is_file(), name
     assert doc.count("holds") >= 5  # the figures' verdicts are carried over
@@ -262,3 +262,24 @@ def test_reproduce_all_resumes_without_running_again(everything: Path) -> None:
     reproduce_all(everything, quick=True, video=False, log=lines.append)
     assert all("done earlier" in line for line in lines) and len(lines) == len(ITEMS)
     assert (everything / "fig10" / "fig10.csv").stat().st_mtime_ns == before  # not re-run
+
+
+# ----------------------------------------------------------------------------- fig9
+def test_fig9_step_durations_within_the_bounds(everything: Path) -> None:
+    out = everything / "fig9"
+    text = _check_files(out, "fig9")
+    rows = _rows(out, "fig9")
+    assert {r["run"] for r in rows} == {"reference", "push", "payload", "uneven"}
+    dt = _floats(rows, "dt_s")
+    assert np.all((dt >= 0.045 - 1e-9) & (dt <= 0.07 + 1e-9))  # the paper's clip
+    assert np.allclose(_floats(rows, "step_s"), 5 * dt)
+    for r in rows:
+        assert r["nominal"] == ("1" if abs(float(r["dt_s"]) - 0.045) <= 0.001 else "0")
+    push = [r for r in rows if r["run"] == "push"]
+    assert all(r["disturbed"] == ("1" if float(r["t_s"]) >= 4.0 else "0") for r in push)
+    for name in ("reference", "push", "payload", "uneven"):
+        t = _floats([r for r in rows if r["run"] == name], "t_s")
+        assert len(t) >= 6 and np.all(np.diff(t) > 0.15)  # one per step (>= 0.225 s apart)
+    run = load_run(out / "runs" / "gaitnet-payload")
+    assert run.summary["payload_kg"] == 1.5
+    assert "preview" in text  # the deviation from the paper's unknown terrain is stated

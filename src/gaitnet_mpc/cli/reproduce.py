@@ -52,12 +52,10 @@ def add_parser(sub: Any) -> None:
     rep.add_argument(
         "--quick",
         action="store_true",
-        help="fig6: one 10 cm layout, 3 s per method; fig7, fig8, fig10, fig11, obstacle: "
-        "2.5-4 s runs without video, fig10 without its load search (the test suite's)",
+        help="fig6: one 10 cm layout, 3 s per method; fig7-fig11, obstacle: 2.5-4 s runs "
+        "without video, fig10 without its load search; all: every item quick (the test suite's)",
     )
-    rep.add_argument(
-        "--no-video", action="store_true", help="fig7, fig8, fig10, fig11, obstacle: no videos"
-    )
+    rep.add_argument("--no-video", action="store_true", help="fig7-fig11, obstacle, all: no videos")
     rep.add_argument(
         "--seeds", type=int, default=None, help="fig6: layouts per gap width (default: 10)"
     )

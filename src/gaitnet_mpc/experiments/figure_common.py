@@ -1,6 +1,7 @@
 """What the paper's humanoid figures share (:mod:`~gaitnet_mpc.experiments.paper_figures`
 runs them; one module each: :mod:`~gaitnet_mpc.experiments.figure_fig7`,
-:mod:`~gaitnet_mpc.experiments.figure_fig8`, :mod:`~gaitnet_mpc.experiments.figure_fig10`,
+:mod:`~gaitnet_mpc.experiments.figure_fig8`, :mod:`~gaitnet_mpc.experiments.figure_fig9`,
+:mod:`~gaitnet_mpc.experiments.figure_fig10`,
 :mod:`~gaitnet_mpc.experiments.figure_fig11`,
 :mod:`~gaitnet_mpc.experiments.figure_obstacle`).
 
@@ -51,6 +52,7 @@ CONTROLLER_COLORS = {"gaitnet": "tab:blue", "kd": "tab:orange"}
 CSV_FIELDS = {
     "fig7": "kind index foot t_s x_m y_m z_m x_min_m x_max_m y_min_m y_max_m patch allowed",
     "fig8": "controller t_s t_pred_s lGx_pred lGx_meas kGy_pred kGy_meas kGz_pred kGz_meas",
+    "fig9": "run t_s dt_s step_s disturbed nominal",
     "fig10": "controller t_s t_since_contact_s com_x_m cart_x_m cart_vx_mps hand_push_n "
     "max_tau_ratio",
     "fig11": "controller t_s com_x_m com_vx_mps cmd_vx_mps ramped_cmd_vx_mps com_over_gap",

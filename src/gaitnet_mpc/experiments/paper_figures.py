@@ -1,4 +1,4 @@
-"""The paper's 3-D humanoid figures (Figs. 7, 8, 10, 11 and 1(e)), one results folder each.
+"""The paper's 3-D humanoid figures (Figs. 7-11 and 1(e)), one results folder each.
 
 :func:`reproduce_figure` runs the figure's episodes (``humanoid3d``, each a full run folder
 under ``<out>/runs/<label>``, video included unless ``video=False``), reads them back with
@@ -14,7 +14,8 @@ its fall time, and its verdict is "does not hold".
 
 One module per figure, each with its episodes, drawing, table and verdict rule in its
 docstring: ``fig7`` (3-D stepping stones) :mod:`~gaitnet_mpc.experiments.figure_fig7`,
-``fig8`` (spatial momenta) :mod:`~gaitnet_mpc.experiments.figure_fig8`, ``fig10``
+``fig8`` (spatial momenta) :mod:`~gaitnet_mpc.experiments.figure_fig8`, ``fig9`` (step
+durations under disturbances) :mod:`~gaitnet_mpc.experiments.figure_fig9`, ``fig10``
 (pushing a cart with an unknown load) :mod:`~gaitnet_mpc.experiments.figure_fig10`, ``fig11``
 (velocity tracking over a 20 cm gap) :mod:`~gaitnet_mpc.experiments.figure_fig11` and
 ``obstacle`` (Fig. 1(e)) :mod:`~gaitnet_mpc.experiments.figure_obstacle`; what they share
@@ -24,7 +25,7 @@ figure names (:data:`FIGURES`), their files (:data:`ARTIFACTS`), the durations a
 :func:`reproduce_figure`; it re-exports the figure modules' public names.
 
 ``quick=True``: :data:`QUICK_DURATION_S` of simulated time per episode and no video (all
-five figures in about a minute on two cores; ``fig10`` skips its load search). The video
+six figures in about a minute on two cores; ``fig10`` skips its load search). The video
 and the snapshot strip render offscreen: without a display, ``MUJOCO_GL=egl`` must be set
 before MuJoCo is first imported (``gaitnet-mpc`` sets it). :func:`reproduce_figure` checks
 ``out`` but takes no lock on it: the caller (the CLI) holds the folder's lock, as it does
@@ -64,6 +65,7 @@ from gaitnet_mpc.experiments.figure_fig8 import (
     momentum_pairs,
     prediction_errors,
 )
+from gaitnet_mpc.experiments.figure_fig9 import PAYLOAD_KG, PUSH, build_fig9
 from gaitnet_mpc.experiments.figure_fig10 import (
     CART_LOAD_KG,
     HEADROOM_MAX,
@@ -89,6 +91,7 @@ from gaitnet_mpc.runner.episode import VideoConfig
 FIGURES: dict[str, str] = {
     "fig7": "humanoid over the 3-D stepping stones: snapshots, touchdowns, CoM regions (Fig. 7)",
     "fig8": "spatial momenta, measured vs MPC-predicted, gaitnet and kd (Fig. 8)",
+    "fig9": "gaitnet's step durations under a push, a payload and uneven ground (Fig. 9)",
     "fig10": "pushing a cart with an unknown 35 kg load, srbm and gaitnet; largest load (Fig. 10)",
     "fig11": "x-velocity tracking over a 20 cm gap, gaitnet and kd (Fig. 11)",
     "obstacle": "over a 3 cm obstacle and a 15 cm hole: swing-foot clearance (Fig. 1(e))",
@@ -100,8 +103,12 @@ ARTIFACTS: dict[str, tuple[str, ...]] = {
     for name in FIGURES
 }
 #: Simulated time per episode [s], full and quick.
-DURATION_S = {"fig7": 8.0, "fig8": 8.0, "fig10": 16.0, "fig11": 8.0, "obstacle": 8.0}
-QUICK_DURATION_S = {"fig7": 2.5, "fig8": 2.5, "fig10": 2.5, "fig11": 3.0, "obstacle": 4.0}
+DURATION_S = {
+    "fig7": 8.0, "fig8": 8.0, "fig9": 12.0, "fig10": 16.0, "fig11": 8.0, "obstacle": 8.0,
+}  # fmt: skip
+QUICK_DURATION_S = {
+    "fig7": 2.5, "fig8": 2.5, "fig9": 2.0, "fig10": 2.5, "fig11": 3.0, "obstacle": 4.0,
+}  # fmt: skip
 
 
 def _stderr(line: str) -> None:
@@ -141,6 +148,7 @@ def reproduce_figure(
 _BUILDERS: dict[str, Callable[[Path, float, VideoConfig | None, Log, bool], Report]] = {
     "fig7": build_fig7,
     "fig8": build_fig8,
+    "fig9": build_fig9,
     "fig10": build_fig10,
     "fig11": build_fig11,
     "obstacle": build_obstacle,
@@ -158,6 +166,8 @@ __all__ = [
     "KD_DT_S",
     "MOMENTA",
     "NRMSE_MAX",
+    "PAYLOAD_KG",
+    "PUSH",
     "PUSH_DISTANCE_M",
     "QUICK_DURATION_S",
     "REGION_COLORS",

@@ -70,7 +70,7 @@ def fig6(
 
 
 def figure(out: Path, name: str, *, quick: bool = False, video: bool = True) -> Path:
-    """Figs. 7, 8, 10, 11 and 1(e) (``obstacle``): the humanoid's figures
+    """Figs. 7-11 and 1(e) (``obstacle``): the humanoid's figures
     (:mod:`~gaitnet_mpc.experiments.paper_figures`)."""
     from gaitnet_mpc.experiments.paper_figures import reproduce_figure
 
@@ -102,7 +102,7 @@ ARTIFACTS: dict[str, tuple[str, ...]] = {
 }  # fmt: skip
 #: What ``reproduce all`` (:mod:`~gaitnet_mpc.experiments.reproduce_all`) runs, in this
 #: order, each into a folder of its name.
-ALL_ITEMS = ("table1", "table2", "fig6", "fig7", "fig8", "fig10", "fig11", "obstacle")
+ALL_ITEMS = ("table1", "table2", "fig6", "fig7", "fig8", "fig9", "fig10", "fig11", "obstacle")
 ARTIFACTS["all"] = (*ALL_ITEMS, "reproduction.md")
 #: The ones that resume from what an earlier, interrupted run left in the folder.
 RESUMABLE = frozenset({"table2", "fig6", "fig10", "all"})

@@ -1,13 +1,13 @@
 """``gaitnet-mpc reproduce all``: every table and figure of the paper, then one document.
 
-Each item (:data:`ITEMS`: Tables I and II, Figs. 6, 7, 8, 10, 11 and 1(e)) runs into its own
+Each item (:data:`ITEMS`: Tables I and II, Figs. 6-11 and 1(e)) runs into its own
 folder ``<out>/<name>`` through :mod:`~gaitnet_mpc.experiments.reproduce`, in the order
 of :data:`ITEMS`. An item whose report (``<out>/<name>/<name>.md``) exists is not run
 again, so an interrupted run resumes where it stopped (and Table II and Fig. 6, resumable
 themselves, resume inside the item). Then :func:`write_document` writes
 ``<out>/reproduction.md``: one section per table and figure of the paper in the paper's
 order, each with its images, the item's report (our numbers beside the paper's, and the
-verdicts) and, for what has no command yet (Fig. 9), why.
+verdicts) and, for what has no command of its own (Fig. 4, drawn by Table I), where it is.
 
 ``quick``: each item's quick form (Table I: one net per feature space, 20 epochs; Table II:
 :data:`QUICK_TABLE2_PROBLEMS` problems without the joint-space columns; the figures'
@@ -62,10 +62,7 @@ SECTIONS = (
     Section("Fig. 6: the 2-D biped over 5-15 cm gaps", "fig6", ("fig6.png",)),
     Section("Fig. 7: 3-D stepping stones", "fig7", ("fig7.png", "fig7_strip.png")),
     Section("Fig. 8: spatial momenta, measured and predicted", "fig8", ("fig8.png",)),
-    Section("Fig. 9: step durations under disturbances", None, (),
-            "no command yet: `reproduce fig9` is part of the robustness work (the push, "
-            "payload and uneven-terrain sweeps); the step durations of each run are in its "
-            "`mpc_log.csv`"),
+    Section("Fig. 9: step durations under disturbances", "fig9", ("fig9.png",)),
     Section("Fig. 10: pushing a cart with an unknown load", "fig10", ("fig10.png",)),
     Section("Fig. 11: velocity tracking over a 20 cm gap", "fig11", ("fig11.png",)),
     Section("Fig. 1(e): an obstacle, then a gap", "obstacle", ("obstacle.png",)),
