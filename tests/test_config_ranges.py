@@ -219,6 +219,31 @@ def test_the_issues_inputs_are_refused_by_the_registry(name: str, item: str, mes
     assert str(exc.value).startswith(f"--set {message}")
 
 
+@pytest.mark.parametrize("key", ["mass_kg", "toe_m", "heel_m", "min_foot_separation_m"])
+def test_a_setting_the_controller_takes_from_the_robot_is_refused(key: str) -> None:
+    with pytest.raises(ConfigError) as exc:
+        controller_config("kd", False, overrides=(f"sequential.kd.{key}=0.05",))
+    assert exc.value.field == f"--set sequential.kd.{key}"
+    assert "takes it from the robot" in exc.value.expected
+
+
+@pytest.mark.parametrize(
+    ("items", "key"),
+    [
+        (("dt_policy.bounds_s=[0.03, 0.1]",), "dt_policy.bounds_s"),
+        (("dt_policy.dt_s=0.03",), "dt_policy.dt_s"),
+    ],
+)
+def test_dt_policy_outside_the_schedules_bounds_is_refused(items: tuple[str], key: str) -> None:
+    narrow = "sequential.dt_bounds_s=[0.045, 0.07]"
+    with pytest.raises(ConfigError) as exc:
+        controller_config("gaitnet", False, overrides=(*items, narrow))
+    assert exc.value.field == f"--set {key}"
+    assert "within sequential.dt_bounds_s [0.045, 0.07] s" in exc.value.expected
+    ok = controller_config("gaitnet", False, overrides=("dt_policy.bounds_s=[0.05, 0.06]", narrow))
+    assert ok.dt_policy.bounds_s == (0.05, 0.06)
+
+
 def test_the_cli_prints_the_range_and_exits_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -69,6 +69,11 @@ def walking_low_level_config() -> LowLevelConfig:
 LATERAL_RETURN_TIME_S = 0.7
 
 
+#: Fields of ``sequential.kd`` the controller sets from the robot, left at their defaults
+#: in a configuration (setting one would silently have no effect).
+ROBOT_FIELDS = ("mass_kg", "toe_m", "heel_m", "min_foot_separation_m")
+
+
 @dataclass(frozen=True)
 class KDWalkConfig:
     """Settings of the kino-dynamic walking controller."""
@@ -178,6 +183,24 @@ class KDWalkConfig:
         check_ranges(self)
         if self.lateral_reference not in ("line", "lip"):
             raise ConfigError("lateral_reference", self.lateral_reference, "'line' or 'lip'")
+        kd, default = self.sequential.kd, KDConfig()
+        for name in ROBOT_FIELDS:  # KDWalkController sets them from the robot
+            if getattr(kd, name) != getattr(default, name):
+                raise ConfigError(
+                    f"sequential.kd.{name}", getattr(kd, name),
+                    f"its default {getattr(default, name)}: the controller takes it from the "
+                    "robot (cop_fraction scales the foot, keep_feet_apart sets the separation)",
+                )  # fmt: skip
+        lo, hi = self.sequential.dt_bounds_s
+        policy = self.dt_policy
+        for name, value in (("bounds_s", policy.bounds_s), ("dt_s", policy.dt_s)):
+            values = value if isinstance(value, tuple) else (value,)
+            if any(v is not None and not lo <= v <= hi for v in values):
+                raise ConfigError(
+                    f"dt_policy.{name}", value,
+                    f"within sequential.dt_bounds_s [{lo:g}, {hi:g}] s (every dt is clipped "
+                    "into those)",
+                )  # fmt: skip
 
 
 def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:

@@ -68,8 +68,9 @@ class KDConfig:
     :func:`~gaitnet_mpc.mpc.qp.make_workspace` (over :data:`BACKEND_OPTIONS`).
 
     ``mass_kg``: pass ``RobotModel.total_mass_kg``; the walking controller
-    (``KDWalkController``) overwrites it, ``toe_m``, ``heel_m`` and
-    ``min_foot_separation_m`` with the robot's.
+    (``KDWalkController``) sets it, ``toe_m``, ``heel_m`` and ``min_foot_separation_m``
+    from the robot, and its configuration refuses them changed
+    (``KDWalkConfig``, ``ROBOT_FIELDS``).
     """
 
     horizon: int = bounded(10, "[1, 100]", "an integer", "stages; h = 10 in the paper")
