@@ -12,7 +12,8 @@ comparison (Sec. V-B):
 
 A case is one episode (method x width x seed, 10 s at 0.5 m/s by default); success is no
 fall, no foothold violation and no leg contact. Each case is one item of a spawn process
-pool or of Ray (:mod:`gaitnet_mpc.parallel`), as ``sweep`` runs its cases. The folder holds:
+pool or of Ray, run by :func:`~gaitnet_mpc.experiments.case_runs.run_cases` as ``sweep``'s
+cases are. The folder holds:
 
 * ``cases.jsonl``: the settings (first line), then one line per finished case, flushed
   and fsync'ed (a torn last line is ignored); the same command resumes;
@@ -31,11 +32,10 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from contextlib import closing
 from pathlib import Path
 from typing import Any
 
-from gaitnet_mpc.errors import GaitNetMPCError, PartialFailure
+from gaitnet_mpc.experiments.case_runs import CaseRun, read_records, run_cases
 from gaitnet_mpc.experiments.collect import CollectOptions
 from gaitnet_mpc.experiments.fig6_cases import (
     METHOD_LABELS,
@@ -44,13 +44,10 @@ from gaitnet_mpc.experiments.fig6_cases import (
     course_file,
     make_cases,
 )
-from gaitnet_mpc.experiments.sweep import read_records
-from gaitnet_mpc.parallel import run_processes, run_ray, stop_signals_as_keyboard_interrupt
-from gaitnet_mpc.results.io import append_failure, append_json_line, write_atomic
-from gaitnet_mpc.results.outdir import check_output_path, folder_lock, write_status
+from gaitnet_mpc.results.io import append_json_line, write_atomic
+from gaitnet_mpc.results.outdir import check_output_path, folder_lock
 
 CASES = "cases.jsonl"
-ERRORS_LOG = "errors.log"
 #: Poses of the snapshot strip: one every this many seconds, while the CoM is in the
 #: strip's x range [m].
 SNAPSHOT_PERIOD_S = 0.4
@@ -207,71 +204,13 @@ def reproduce_fig6(
             append_json_line(path, {"fig6_settings": settings.to_dict()})
         _write_courses(folder, settings)
         cases = make_cases(settings)
-        keys = [c["key"] for c in cases]
-        todo = [c for c in cases if c["key"] not in records]
-        failed: list[str] = []
 
-        def status(state: str, code: int | None = None) -> None:
-            left = [k for k in keys if k not in records]
-            note = "run the same command again to run the cases left" if left else ""
-            write_status(
-                folder,
-                command=command_line,
-                state=state,
-                exit_code=code,
-                done=[k for k in keys if k in records],
-                todo=left,
-                note=note,
-            )
-
-        def outputs() -> None:
+        def outputs(failed: list[str]) -> None:
             wall = time.perf_counter() - t0
             write_report(folder, settings, list(records.values()), command_line, wall, failed)
 
-        log(
-            f"fig6: {len(todo)} of {len(cases)} cases to run ({len(records)} already in "
-            f"{path}), {options.workers} worker(s), backend {options.backend}"
-        )
-        status("running")
-        items = [(case, str(folder.resolve())) for case in todo]
-        if options.backend == "ray":
-            runs = run_ray(run_case, items, options.workers, options.address, max_retries=0)
-        else:
-            runs = run_processes(run_case, items, options.workers)
-        n = 0
-        try:
-            with closing(runs), stop_signals_as_keyboard_interrupt():
-                for outcome in runs:
-                    case = outcome.item[0]
-                    n += 1
-                    if outcome.error is not None:
-                        if isinstance(outcome.error, GaitNetMPCError):
-                            raise outcome.error
-                        failed.append(case["key"])
-                        append_failure(
-                            folder / ERRORS_LOG, case["key"], "case",
-                            {k: v for k, v in case.items() if k != "settings"},
-                            outcome.error, outcome.worker_died,
-                        )  # fmt: skip
-                        log(f"[{n}/{len(todo)}] {case['key']}: FAILED (see {ERRORS_LOG})")
-                        continue
-                    record = outcome.get()
-                    append_json_line(path, record)
-                    records[record["key"]] = record
-                    status("running")
-                    if options.progress:
-                        log(f"[{n}/{len(todo)}] {case_line(record)}")
-        except KeyboardInterrupt:
-            outputs()
-            status("interrupted", 130)
-            log(f"interrupted: {len(records)} of {len(cases)} cases are in {path}; rerun to resume")
-            raise
-        outputs()
-        if failed:
-            status("failed", 3)
-            raise PartialFailure("reproduce fig6", failed, str(folder / ERRORS_LOG))
-        status("done", 0)
-        return records
+        run = CaseRun("reproduce fig6", folder, path, run_case, outputs, case_line, command_line)
+        return run_cases(run, cases, records, options, log)
 
 
 def case_line(record: dict[str, Any]) -> str:

@@ -27,13 +27,13 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Callable, Generator
-from contextlib import closing
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
-from gaitnet_mpc.errors import ConfigError, GaitNetMPCError, PartialFailure
+from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.experiments.case_runs import CaseRun, read_records, run_cases
 from gaitnet_mpc.experiments.collect import CollectOptions
 from gaitnet_mpc.experiments.sweep_cases import (
     DIRECTIONS,
@@ -46,12 +46,10 @@ from gaitnet_mpc.experiments.sweep_cases import (
     uneven_file_name,
 )
 from gaitnet_mpc.experiments.sweep_report import csv_text, markdown, push_polar
-from gaitnet_mpc.parallel import Outcome, run_processes, run_ray, stop_signals_as_keyboard_interrupt
-from gaitnet_mpc.results.io import append_failure, append_json_line, write_atomic
-from gaitnet_mpc.results.outdir import check_output_path, folder_lock, write_status
+from gaitnet_mpc.results.io import append_json_line, write_atomic
+from gaitnet_mpc.results.outdir import check_output_path, folder_lock
 
 CASES = "cases.jsonl"
-ERRORS_LOG = "errors.log"
 CSV = "sweep.csv"
 REPORT = "sweep.md"
 POLAR = "push_polar.png"
@@ -136,12 +134,6 @@ class SweepSettings:
         }
 
 
-class SettingsLike(Protocol):
-    """Settings that identify a folder of cases (:func:`read_records`)."""
-
-    def to_dict(self) -> dict[str, Any]: ...
-
-
 def check_inputs(settings: SweepSettings, folder: Path) -> Path:
     """What a worker would find wrong, found before any case starts: the output path and
     every controller's settings (``@DT`` in the accepted range)."""
@@ -158,38 +150,6 @@ def check_inputs(settings: SweepSettings, folder: Path) -> Path:
 
 
 # ----------------------------------------------------------------------------- storage
-def read_records(
-    path: Path, settings: SettingsLike, header: str = "sweep_settings"
-) -> dict[str, dict[str, Any]]:
-    """The finished cases in ``path`` by key (a torn last line is ignored); the line with
-    the key ``header`` holds the settings (``reproduce fig6`` keeps its cases this way).
-
-    Raises:
-        ConfigError: the file holds another sweep's settings.
-    """
-    if not path.exists():
-        return {}
-    records: dict[str, dict[str, Any]] = {}
-    for line in path.read_text().splitlines():
-        try:
-            item = json.loads(line)
-        except json.JSONDecodeError:
-            continue  # a line cut by a kill during the write
-        if header in item:
-            if item[header] != settings.to_dict():
-                old, new = item[header], settings.to_dict()
-                diff = sorted(k for k in old.keys() | new.keys() if old.get(k) != new.get(k))
-                raise ConfigError(
-                    "--out",
-                    str(path.parent),
-                    f"a folder of the same sweep settings (it differs in: {', '.join(diff)}); "
-                    "use another --out",
-                )
-            continue
-        records[str(item["key"])] = item
-    return records
-
-
 def _write_courses(folder: Path, settings: SweepSettings) -> None:
     """The ``uneven`` course files of ``terrain`` (the same bytes each time)."""
     from gaitnet_mpc.terrain.builtin_courses import uneven_course
@@ -232,15 +192,6 @@ def _write_outputs(
 
 
 # ----------------------------------------------------------------------------- run
-def _runs(
-    cases: list[dict[str, Any]], folder: Path, options: Options
-) -> Generator[Outcome[Any, dict[str, Any]], None, None]:
-    items = [(case, str(folder.resolve())) for case in cases]
-    if options.backend == "ray":
-        return run_ray(run_case, items, options.workers, options.address, max_retries=0)
-    return run_processes(run_case, items, options.workers)
-
-
 def _stderr(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
 
@@ -270,88 +221,14 @@ def sweep(
         if settings.mode == "terrain":
             _write_courses(folder, settings)
         cases = make_cases(settings.mode, settings.controllers, settings.plan)
-        keys = [c["key"] for c in cases]
-        todo = [c for c in cases if c["key"] not in records]
-        failed: list[str] = []
 
-        def status(state: str, code: int | None = None) -> None:
-            left = [k for k in keys if k not in records]
-            note = "run the same command again to run the cases left"
-            if failed:
-                note = f"{len(failed)} case(s) failed (see {ERRORS_LOG}); " + note
-            write_status(
-                folder,
-                command=command_line,
-                state=state,
-                exit_code=code,
-                done=[k for k in keys if k in records],
-                todo=left,
-                note=note if left else "",
-            )
-
-        def outputs() -> None:
+        def outputs(failed: list[str]) -> None:
             wall = time.perf_counter() - t0
             _write_outputs(folder, settings, records, command_line, wall, len(cases), failed)
 
-        if not todo:
-            log(f"nothing to do: all {len(cases)} cases are in {path}")
-            outputs()
-            status("done", 0)
-            return records
-        log(
-            f"sweep {settings.mode}: {len(todo)} of {len(cases)} cases to run "
-            f"({len(records)} already in {path}), {options.workers} worker(s), "
-            f"backend {options.backend}"
-        )
-        status("running")
-        runs = _runs(todo, folder, options)
-        n = 0
-        try:
-            with closing(runs), stop_signals_as_keyboard_interrupt():
-                for outcome in runs:
-                    case = outcome.item[0]
-                    n += 1
-                    if outcome.error is not None:
-                        if isinstance(outcome.error, GaitNetMPCError):
-                            raise outcome.error  # bad input the checks above did not see
-                        failed.append(case["key"])
-                        brief = {k: v for k, v in case.items() if k != "plan"}
-                        append_failure(
-                            folder / ERRORS_LOG,
-                            case["key"],
-                            "case",
-                            brief,
-                            outcome.error,
-                            outcome.worker_died,
-                        )
-                        status("running")
-                        log(
-                            f"[{n}/{len(todo)}] {case['key']}: FAILED "
-                            f"({type(outcome.error).__name__}: {str(outcome.error)[:200]}); "
-                            f"see {folder / ERRORS_LOG}"
-                        )
-                        continue
-                    record = outcome.get()
-                    append_json_line(path, record)
-                    records[record["key"]] = record
-                    status("running")
-                    if options.progress:
-                        log(f"[{n}/{len(todo)}] {case_line(record)}")
-        except KeyboardInterrupt:
-            outputs()
-            status("interrupted", 130)
-            log(
-                f"interrupted: {len(records)} of {len(cases)} cases are in {path}; "
-                "run the same command again to run the rest"
-            )
-            raise
-        outputs()
-        log(f"ran {n - len(failed)} cases in {time.perf_counter() - t0:.0f} s into {folder}")
-        if failed:
-            status("failed", 3)
-            raise PartialFailure("sweep", failed, str(folder / ERRORS_LOG))
-        status("done", 0)
-        return records
+        run = CaseRun(f"sweep {settings.mode}", folder, path, run_case, outputs, case_line,
+                      command_line, hidden="plan")  # fmt: skip
+        return run_cases(run, cases, records, options, log)
 
 
 def case_line(r: dict[str, Any]) -> str:
