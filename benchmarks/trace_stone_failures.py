@@ -31,14 +31,15 @@ from common import (
 )
 
 
-def trace(job: tuple[str, int, float, float]) -> dict[str, Any]:
+def trace(job: tuple[str, int, float, float, tuple[str, ...]]) -> dict[str, Any]:
     """One seed's episode and what it did before it tipped."""
     from gaitnet_mpc.scenario import build_episode, make_scenario, run_scenario
 
-    controller, seed, duration_s, onset_rad = job
+    controller, seed, duration_s, onset_rad, overrides = job
     dt = 0.045 if controller == "kd" else None
     scenario = make_scenario(controller=controller, course="stepping-stones", course_seed=seed,
-                             vx_mps=0.75, duration_s=duration_s, dt_s=dt)  # fmt: skip
+                             vx_mps=0.75, duration_s=duration_s, dt_s=dt,
+                             overrides=overrides)  # fmt: skip
     episode = build_episode(scenario)
     trunk = episode.sim.model.body(episode.robot.spec.trunk_body).id
     rows: list[tuple[float, float, float, float]] = []
@@ -110,16 +111,20 @@ def _last_holds(r: dict[str, Any], n: int = 3) -> str:
     )
 
 
-def report(controller: str, results: list[dict[str, Any]], wall_s: float, onset: float) -> str:
+def report(
+    controller: str, results: list[dict[str, Any]], wall_s: float, onset: float, sets: list[str]
+) -> str:
     bad = [r for r in results if not r["clean"]]
+    overrides = ", ".join(f"`{x}`" for x in sets) or "none"
+    role = "tuning seeds" if results[0]["seed"] >= 100 else "none used to choose anything"
     lines = [
         f"# `{controller}` on seeded stepping stones: every run that is not clean, traced",
         "",
         machine_info(("numpy", "mujoco", "pin", "piqp")),
         "",
         f"humanoid3d, 0.75 m/s, one-step preview, 8 s per seed, seeds "
-        f"{results[0]['seed']}-{results[-1]['seed']} (none used to choose anything); "
-        f"{git_state()}. Clean: no fall, no foothold violation, no leg contact. "
+        f"{results[0]['seed']}-{results[-1]['seed']} ({role}); {git_state()}; "
+        f"overrides: {overrides}. Clean: no fall, no foothold violation, no leg contact. "
         f"Tilt onset: the first tick after which roll or pitch stays beyond {onset:g} rad "
         "until the fall.",
         "",
@@ -151,10 +156,12 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=8.0)
     ap.add_argument("--onset-rad", type=float, default=0.2)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a configuration override, as `gaitnet-mpc run --set`")  # fmt: skip
     add_out_option(ap, "stone_failures_gaitnet.md")
     args = ap.parse_args()
     seeds = range(args.first_seed, args.first_seed + args.seeds)
-    jobs = [(args.controller, s, args.duration, args.onset_rad) for s in seeds]
+    jobs = [(args.controller, s, args.duration, args.onset_rad, tuple(args.set)) for s in seeds]
     t0 = time.perf_counter()
     done = run_pool(
         trace, jobs, args.workers,
@@ -162,7 +169,7 @@ def main() -> None:
     )  # fmt: skip
     results = [done[j] for j in jobs]
     wall_s = time.perf_counter() - t0
-    write_report(args.out, report(args.controller, results, wall_s, args.onset_rad))
+    write_report(args.out, report(args.controller, results, wall_s, args.onset_rad, args.set))
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Low-level control: stance wrench mapping and the optional trunk-yaw feedback."""
+"""Low-level control: stance wrench mapping and the optional trunk yaw / tilt feedback."""
 
 from __future__ import annotations
 
@@ -25,6 +25,24 @@ def test_trunk_yaw_feedback_acts_on_the_stance_hip_yaw_only() -> None:
     diff = on - off
     np.testing.assert_allclose(diff[hip_yaw], 1.0, atol=1e-9)  # kp * error
     assert np.count_nonzero(np.abs(diff) > 1e-12) == 1
+
+
+def test_trunk_tilt_feedback_is_shared_by_the_stance_hip_roll_and_pitch() -> None:
+    robot = load_robot("humanoid3d")
+    qpos = robot.standing_qpos()
+    qpos[3:7] = [np.cos(0.05), np.sin(0.05), 0.0, 0.0]  # trunk rolled 0.1 rad
+    state = Simulator(robot, load_course("flat")).reset(qpos)
+    assert abs(state.base_rpy_rad[0] - 0.1) < 1e-9
+    stance = np.array([0.0, 0.0, 80.0, 0.0, 0.0, 0.0])
+    wrench = {"left": stance, "right": stance}
+    off = LowLevelController(robot).torques(state, wrench, {}, swing_yaw_rad=0.0)
+    on = LowLevelController(robot, LowLevelConfig(stance_tilt_kp_nm_per_rad=10.0)).torques(
+        state, wrench, {}, swing_yaw_rad=0.0
+    )
+    diff = on - off
+    for foot in ("left", "right"):  # kp * roll, half on each stance leg
+        np.testing.assert_allclose(diff[robot.joint_names.index(f"{foot}_hip_roll")], 0.5)
+    assert np.count_nonzero(np.abs(diff) > 1e-12) == 2  # pitch is level: no pitch torque
 
 
 def _swing_torques(robot, state, accel, ff: float) -> np.ndarray:

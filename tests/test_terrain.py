@@ -399,6 +399,22 @@ def test_reachable_foothold_bounds_prefers_the_patch_the_leg_can_reach() -> None
     assert lo[0] == pytest.approx(1.73)
 
 
+def test_reachable_foothold_bounds_reach_back_narrows_the_window_behind_the_com() -> None:
+    """Gap 1.6-1.8 m, CoM at touchdown 1.65 m: the near side (ends 1.57 m shrunk) is closer
+    to the nominal foothold than the far one (from 1.83 m); a 0.05 m reach behind the CoM
+    rules it out."""
+    course = load_course("gap", width_m=0.2, x_m=1.6)
+    args = ((1.65, 0.0), "left", (1.66, 0.06))
+    _, hi, patch = course.reachable_foothold_bounds(*args, reach_x_m=0.2, margin_m=0.03)
+    assert patch == course.patch_at(1.0, 0.0)
+    assert hi[0] == pytest.approx(1.57)
+    lo, _, patch = course.reachable_foothold_bounds(
+        *args, reach_x_m=0.2, reach_back_m=0.05, margin_m=0.03
+    )
+    assert patch == course.patch_at(2.0, 0.0)
+    assert lo[0] == pytest.approx(1.83)
+
+
 def test_reachable_foothold_bounds_respect_the_foot_of_a_patch() -> None:
     course = load_course("stepping-stones")
     for foot in ("left", "right"):

@@ -206,6 +206,7 @@ class KDWalkController(WalkingBase):
                 foot,
                 nominal[:2],
                 reach_x_m=self.config.foothold_reach_m,
+                reach_back_m=self.config.foothold_reach_back_m,
                 margin_m=self.config.foothold_margin_m,
                 margin_y_m=self.config.foothold_margin_y_m,
             )

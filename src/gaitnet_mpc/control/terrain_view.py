@@ -75,6 +75,7 @@ class TerrainView:
         reach_x_m: float,
         margin_m: float,
         margin_y_m: float | None = None,
+        reach_back_m: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
         """Eq. 24 box of the next touchdown: :meth:`Course.reachable_foothold_bounds`."""
         return self._course.reachable_foothold_bounds(
@@ -84,6 +85,7 @@ class TerrainView:
             reach_x_m=reach_x_m,
             margin_m=margin_m,
             margin_y_m=margin_y_m,
+            reach_back_m=reach_back_m,
         )
 
     def swing_obstacles(self, x0_m: float, x1_m: float) -> list[Obstacle]:

@@ -36,11 +36,13 @@ def reachable_foothold_bounds(
     reach_y_m: float = 0.25,
     margin_m: float = 0.03,
     margin_y_m: float | None = None,
+    reach_back_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int | None]:
     """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step preview).
 
     The foot can land only within ``reach`` of the CoM at touchdown, ``p_com_td_xy``
-    (the hip is above it). Among the ``patches`` that allow ``foot``, each shrunk by
+    (the hip is above it): ``reach_x_m`` ahead along x, ``reach_back_m`` behind (default
+    the same), ``reach_y_m`` across. Among the ``patches`` that allow ``foot``, each shrunk by
     ``margin_m`` (``margin_y_m`` across, default the same), those whose box meets that
     window are candidates; the one whose part inside the window is closest to the
     nominal foothold ``p_nominal_xy`` wins, and the bounds are its whole shrunk box (the
@@ -53,7 +55,8 @@ def reachable_foothold_bounds(
     foot = check_foot(foot)
     xc, yc = point_xy(p_com_td_xy, "p_com_td_xy")
     xn, yn = point_xy(p_nominal_xy, "p_nominal_xy")
-    win = (xc - reach_x_m, xc + reach_x_m, yc - reach_y_m, yc + reach_y_m)
+    back_m = reach_x_m if reach_back_m is None else reach_back_m
+    win = (xc - back_m, xc + reach_x_m, yc - reach_y_m, yc + reach_y_m)
     best: tuple[float, int] | None = None
     fallback: tuple[float, int] | None = None
     for i, patch in enumerate(patches):

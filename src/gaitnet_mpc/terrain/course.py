@@ -232,6 +232,7 @@ class Course:
         reach_y_m: float = 0.25,
         margin_m: float = 0.03,
         margin_y_m: float | None = None,
+        reach_back_m: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
         """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step
         preview), on this course's patches: :func:`.bounds.reachable_foothold_bounds`."""
@@ -244,4 +245,5 @@ class Course:
             reach_y_m=reach_y_m,
             margin_m=margin_m,
             margin_y_m=margin_y_m,
+            reach_back_m=reach_back_m,
         )
