@@ -84,6 +84,9 @@ def test_terrain_courses_are_written_with_their_amplitude(tmp_path: Path) -> Non
         (["push", "--controllers", "atlas"], "--controllers: got 'atlas'"),
         (["push", "--controllers", "kd@fast"], "--controllers: got 'kd@fast'"),
         (["push", "--controllers", "kd@5"], "--controllers: got 'kd@5'"),
+        (["push", "--controllers", "kd+"], "--controllers: got 'kd+'"),
+        (["push", "--controllers", "kd+fastest"], "--controllers: got 'kd+fastest'"),
+        (["push", "--controllers", "srbm+realtime"], "--controllers: got 'srbm+realtime'"),
         (["push", "--workers", "0"], "--workers: got 0"),
         (["protocol", "--seeds", "0"], "--seeds: got 0"),
         (["push", "--directions", "up"], "--directions: got ('up',)"),
@@ -100,6 +103,15 @@ def test_bad_input_is_refused_before_any_work(
     assert main(["sweep", *args, "--quick", "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_controller_specs_carry_a_dt_and_a_preset() -> None:
+    from gaitnet_mpc.experiments.sweep_cases import ControllerSpec, parse_controller
+
+    assert parse_controller("gaitnet") == ControllerSpec("gaitnet", None, None)
+    assert parse_controller("kd@0.055") == ControllerSpec("kd", 0.055, None)
+    assert parse_controller("kd@0.045+realtime") == ControllerSpec("kd", 0.045, "realtime")
+    assert parse_controller("gaitnet+realtime") == ControllerSpec("gaitnet", None, "realtime")
 
 
 def test_a_part_of_the_push_grid() -> None:

@@ -36,8 +36,8 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--controllers",
         default=None,
-        help=f"comma-separated, NAME or NAME@DT for a fixed MPC dt [s], e.g. kd@0.055 "
-        f"(default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
+        help=f"comma-separated, NAME[@DT][+PRESET]: a fixed MPC dt [s] and a preset, e.g. "
+        f"kd@0.055 or gaitnet+realtime (default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
     )
     s.add_argument(
         "--seeds",

@@ -91,10 +91,12 @@ class SweepSettings:
         if not self.controllers or len(set(self.controllers)) != len(self.controllers):
             raise ConfigError("--controllers", ",".join(self.controllers), "distinct names")
         for spec in self.controllers:
-            name, dt = parse_controller(spec)
+            name, dt, _ = parse_controller(spec)
             if name not in CONTROLLERS:
                 raise ConfigError(
-                    "--controllers", spec, f"names among {sorted(CONTROLLERS)} (NAME or NAME@DT)"
+                    "--controllers",
+                    spec,
+                    f"names among {sorted(CONTROLLERS)} (NAME[@DT][+PRESET])",
                 )
             if dt is not None and name not in ("kd", "srbm", "wbmpc", "oracle"):
                 raise ConfigError("--controllers", spec, "@DT only for a fixed-dt controller")
@@ -136,14 +138,15 @@ class SweepSettings:
 
 def check_inputs(settings: SweepSettings, folder: Path) -> Path:
     """What a worker would find wrong, found before any case starts: the output path and
-    every controller's settings (``@DT`` in the accepted range)."""
+    every controller's settings (``@DT`` in the accepted range, ``+PRESET`` one of the
+    controller's presets)."""
     from gaitnet_mpc.scenario import make_scenario
 
     folder = check_output_path(folder, "--out")
     for spec in settings.controllers:
-        name, dt = parse_controller(spec)
+        name, dt, preset = parse_controller(spec)
         try:
-            make_scenario(controller=name, dt_s=dt, duration_s=1.0)
+            make_scenario(controller=name, dt_s=dt, preset=preset, duration_s=1.0)
         except ConfigError as exc:
             raise ConfigError("--controllers", spec, f"a valid controller ({exc})") from None
     return folder

@@ -31,7 +31,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 MODES = ("push", "protocol", "payload", "terrain")
 
@@ -138,18 +138,33 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
     raise ConfigError("MODE", mode, f"one of {list(MODES)}")
 
 
-def parse_controller(spec: str) -> tuple[str, float | None]:
-    """``kd@0.055`` -> (``kd``, 0.055): a registry name and an optional fixed dt [s]."""
+class ControllerSpec(NamedTuple):
+    """A sweep's controller: a registry name, an optional fixed dt [s] and preset."""
+
+    name: str
+    dt_s: float | None = None
+    preset: str | None = None
+
+
+def parse_controller(spec: str) -> ControllerSpec:
+    """``kd@0.055+realtime`` -> (``kd``, 0.055, ``realtime``): a registry name, an optional
+    fixed dt [s] and an optional preset (as ``gaitnet-mpc run --dt 0.055 --preset
+    realtime``); ``gaitnet+realtime`` has no dt."""
     from gaitnet_mpc.errors import ConfigError
 
-    name, sep, dt = spec.partition("@")
-    if not sep:
-        return name, None
-    try:
-        value = float(dt)
-    except ValueError:
-        raise ConfigError("--controllers", spec, "NAME or NAME@DT with DT a number [s]") from None
-    return name, value
+    rest, plus, preset = spec.partition("+")
+    if plus and not preset:
+        raise ConfigError("--controllers", spec, "NAME[@DT][+PRESET] with a preset name")
+    name, sep, dt = rest.partition("@")
+    value = None
+    if sep:
+        try:
+            value = float(dt)
+        except ValueError:
+            raise ConfigError(
+                "--controllers", spec, "NAME[@DT][+PRESET] with DT a number [s]"
+            ) from None
+    return ControllerSpec(name, value, preset or None)
 
 
 def make_cases(mode: str, controllers: tuple[str, ...], plan: ModePlan) -> list[dict[str, Any]]:
@@ -252,9 +267,10 @@ def _episode(
     from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.scenario import build_episode, make_scenario
 
-    name, dt_s = parse_controller(controller)
+    name, dt_s, preset = parse_controller(controller)
     scenario = make_scenario(
         controller=name,
+        preset=preset,
         course=course,
         course_seed=course_seed,
         vx_mps=vx_mps,
@@ -284,7 +300,7 @@ def step_s(controller: str) -> float:
     """The nominal step duration of ``controller`` at start: 5 dt [s]."""
     from gaitnet_mpc.dt_policy import NOMINAL_DT_S
 
-    dt = parse_controller(controller)[1]
+    dt = parse_controller(controller).dt_s
     return STAGES_PER_STEP * (NOMINAL_DT_S if dt is None else dt)
 
 
