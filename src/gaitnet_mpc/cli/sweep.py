@@ -37,7 +37,8 @@ def add_parser(sub: Any) -> None:
         "--controllers",
         default=None,
         help=f"comma-separated, NAME[@DT][+PRESET]: a fixed MPC dt [s] and a preset, e.g. "
-        f"kd@0.055 or gaitnet+realtime (default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
+        f"kd@0.055 or gaitnet+realtime "
+        f"(default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
     )
     s.add_argument(
         "--seeds",
