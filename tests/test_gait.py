@@ -224,6 +224,18 @@ def test_swing_velocity_is_derivative_of_position() -> None:
     assert np.allclose(tr.velocity(0.3)[:2], 0.0, atol=1e-9)
 
 
+def test_swing_sample_is_position_velocity_acceleration() -> None:
+    """The 1 kHz single-time path agrees with the batched evaluation, pieces, ends and
+    clamping included (a retarget adds pieces)."""
+    tr = SwingTrajectory(P0, P1, 0.3, obstacles=[(0.1, 0.15, 0.1)], touchdown_speed_mps=0.2)
+    tr.retarget(np.array([0.33, 0.02, 0.01]), 0.12)
+    for t in (-0.1, 0.0, 0.05, 0.12, 0.2, 0.3, 0.4):
+        p, v, a = tr.sample(t)
+        assert np.allclose(p, tr.position(t), rtol=0, atol=1e-12)
+        assert np.allclose(v, tr.velocity(t), rtol=0, atol=1e-10)
+        assert np.allclose(a, tr.acceleration(t), rtol=0, atol=1e-8)
+
+
 @pytest.mark.parametrize("x_range", [(0.12, 0.18), (0.05, 0.10), (0.20, 0.24)])
 def test_swing_clears_obstacle_with_margin(x_range: tuple[float, float]) -> None:
     top, clearance, half = 0.10, 0.02, 0.04

@@ -27,6 +27,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -98,6 +99,15 @@ class LowLevelController:
         }
         self.elbow = {f: names.index(f"{f}_elbow") for f in FEET if robot.spec.arm_joints}
         self.hip_pitch = {f: names.index(f"{f}_hip_pitch") for f in FEET}
+        # per foot, the flat indices of the leg's block of the (nv, nv) mass matrix, and
+        # which entries of the block lie in its upper triangle (crba fills only that one)
+        nv = robot.pin_model.nv
+        self._mass_block = {
+            f: (v[:, None] * nv + v).ravel()
+            for f, v in ((f, robot.leg_joint_index[f] + robot.n_root_dofs) for f in FEET)
+        }
+        n_leg = len(robot.leg_joint_index[FEET[0]])
+        self._upper = np.triu(np.ones((n_leg, n_leg), dtype=bool))
         # per foot, the joints the trunk-tilt feedback drives: (hip roll, hip pitch) or
         # (hip pitch,) on the planar biped, and which of [roll, pitch] each takes
         self.tilt_joints = {
@@ -129,7 +139,7 @@ class LowLevelController:
         """
         r, c = self.robot, self.config
         model, data = r.pin_model, self.data
-        q, _ = r.mj_to_pin(state.qpos, state.qvel)
+        q = r.mj_to_pin_q(state.qpos)
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
         gravity = pin.computeGeneralizedGravity(model, data, q)[r.n_root_dofs :]
@@ -143,7 +153,9 @@ class LowLevelController:
             if swing_yaw_rad is not None and c.stance_yaw_kp_nm_per_rad > 0.0:
                 # (a + pi) mod 2 pi - pi, not geometry.wrap_angle (atan2): that differs in the
                 # last bit and would change the closed-loop logs
-                err = (state.base_rpy_rad[2] - swing_yaw_rad + np.pi) % (2 * np.pi) - np.pi
+                rot = state.base_rot_world
+                psi = math.atan2(rot[1, 0], rot[0, 0])  # trunk yaw (base_rpy_rad[2])
+                err = (psi - swing_yaw_rad + np.pi) % (2 * np.pi) - np.pi
                 tau[idx[0]] += (  # idx[0]: hip yaw, the first leg joint
                     c.stance_yaw_kp_nm_per_rad * err
                     + c.stance_yaw_kd_nms_per_rad * state.base_ang_vel_world_radps[2]
@@ -153,7 +165,7 @@ class LowLevelController:
                 for axis, j in self.tilt_joints[foot]:
                     tau[j] += tilt[axis]
         if swing_target:
-            p_base, rot = r.base_pose(state.qpos)
+            p_base, rot = state.base_pos_world_m, state.base_rot_world
             v_base = state.base_lin_vel_world_mps
             dt = c.ik_lookahead_s
             feet = list(swing_target)
@@ -167,9 +179,7 @@ class LowLevelController:
             base_next = p_base + k * v_base
             n = len(k)
             yaw = None if swing_yaw_rad is None else {f: np.full(n, swing_yaw_rad) for f in feet}
-            sol = whole_body_ik(
-                r, base_next, np.stack([rot] * n), targets, yaw, geometries=self.geometries
-            )
+            sol = whole_body_ik(r, base_next, rot, targets, yaw, geometries=self.geometries)
             upper = pin.crba(model, data, q) if ff > 0.0 else None  # upper triangle filled
             for foot in feet:
                 idx = r.leg_joint_index[foot]
@@ -183,9 +193,9 @@ class LowLevelController:
                 if upper is not None:
                     q_ik = sol.joint_pos_rad[:, idx]
                     qdd_des = (q_ik[2] - 2.0 * q_ik[1] + q_ik[0]) / dt**2
-                    v_idx = idx + r.n_root_dofs  # ascending: the block's upper triangle is M's
-                    block = upper[np.ix_(v_idx, v_idx)]
-                    tau[idx] += ff * (np.triu(block) + np.triu(block, 1).T) @ qdd_des
+                    n_leg = len(idx)  # joints ascending: the block's upper triangle is M's
+                    block = upper.ravel()[self._mass_block[foot]].reshape(n_leg, n_leg)
+                    tau[idx] += ff * np.where(self._upper, block, block.T) @ qdd_des
         if self.arm_index.size:
             q_arm = self.q_nominal.copy()
             for side, other in (("left", "right"), ("right", "left")):
@@ -202,7 +212,7 @@ class LowLevelController:
                 else (c.arm_kp_nm_per_rad, c.arm_kd_nms_per_rad)
             )
             tau[idx] = kp * (q_arm[idx] - qj[idx]) - kd * qdj[idx] + gravity[idx]
-        return np.clip(tau, -r.torque_limit_nm, r.torque_limit_nm)
+        return np.minimum(np.maximum(tau, -r.torque_limit_nm), r.torque_limit_nm)  # np.clip
 
     def _tilt_torque(self, state: RobotState) -> np.ndarray:
         """Hip roll and pitch torques (2,) [N m] that level the trunk, about the heading frame.

@@ -68,6 +68,23 @@ class PiecewiseQuintic:
             for d in derivs
         ]
 
+    def value_velocity_acceleration(self, t: float) -> np.ndarray:
+        """(3, d) value, velocity and acceleration at one time ``t``: :meth:`eval_derivs`
+        with ``(0, 1, 2)`` for a single time, as one (3, 6) x (6, d) product (the 1 kHz
+        swing path)."""
+        n = len(self.breaks) - 1
+        i = min(max(int(np.searchsorted(self.breaks, t, side="right")) - 1, 0), n - 1)
+        s = t - float(self.breaks[i])
+        s2 = s * s
+        basis = np.array(
+            [
+                [1.0, s, s2, s2 * s, s2 * s2, s2 * s2 * s],
+                [0.0, 1.0, 2.0 * s, 3.0 * s2, 4.0 * s2 * s, 5.0 * s2 * s2],
+                [0.0, 0.0, 2.0, 6.0 * s, 12.0 * s2, 20.0 * s2 * s],
+            ]
+        )
+        return basis @ self.coeffs[i]
+
     def truncated(self, t_cut: float) -> PiecewiseQuintic:
         """The pieces before ``t_cut`` (the last one ends at ``t_cut``)."""
         n_keep = min(int(np.searchsorted(self.breaks, t_cut, side="left")), len(self.coeffs))

@@ -271,11 +271,11 @@ class SwingTrajectory:
     def sample(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(position, velocity, acceleration) (3,) each at one time [m, m/s, m/s²], as
         :meth:`position`, :meth:`velocity` and :meth:`acceleration` give them."""
-        tc = np.array([min(max(float(t_s), 0.0), self._T)])
-        xy = self._xy.eval_derivs(tc, (0, 1, 2))
-        z = self._z.eval_derivs(tc, (0, 1, 2))
-        p, v, a = (np.concatenate([h[0], vz[0]]) for h, vz in zip(xy, z, strict=True))
-        return p, v, a
+        tc = min(max(float(t_s), 0.0), self._T)
+        pva = np.hstack(
+            [self._xy.value_velocity_acceleration(tc), self._z.value_velocity_acceleration(tc)]
+        )  # (3, 3): rows p, v, a
+        return pva[0], pva[1], pva[2]
 
     def position(self, t_s: ArrayLike) -> np.ndarray:
         """Foot position [m]: (3,) for scalar ``t_s``, (N, 3) for (N,) times."""

@@ -25,6 +25,8 @@ import pinocchio as pin
 
 from gaitnet_mpc.robots.spec import FEET, RobotSpec
 
+_XYZW_OF_WXYZ = np.array([4, 5, 6, 3])  # qpos entries of Pinocchio's (x, y, z, w)
+
 
 def quat_wxyz_to_xyzw(quat_wxyz: np.ndarray) -> np.ndarray:
     """Reorder a quaternion from MuJoCo's (w, x, y, z) to Pinocchio's (x, y, z, w)."""
@@ -73,6 +75,9 @@ class RobotModel:
         self.joint_lower_rad = np.array([m.jnt_range[j, 0] for j in jids])
         self.joint_upper_rad = np.array([m.jnt_range[j, 1] for j in jids])
         self.torque_limit_nm = np.array([m.actuator_ctrlrange[a, 1] for a in range(m.nu)])
+        self._nominal_joint_pos = np.array(
+            [self.spec.nominal_joint_pos_rad.get(n, 0.0) for n in self.joint_names]
+        )
         self.trunk_body_id: int = m.body(self.spec.trunk_body).id
         self.foot_site_ids = {f: m.site(self.spec.foot_sites[f]).id for f in FEET}
         self.foot_geom_ids = {f: tuple(m.geom(g).id for g in self.spec.foot_geoms[f]) for f in FEET}
@@ -142,6 +147,13 @@ class RobotModel:
         v[0:3] = rot.T @ qvel[0:3]
         return q, v
 
+    def mj_to_pin_q(self, qpos: np.ndarray) -> np.ndarray:
+        """MuJoCo qpos -> Pinocchio q: :meth:`mj_to_pin` without the velocity."""
+        q = np.array(qpos, dtype=float)
+        if not self.spec.planar:
+            q[3:7] = qpos[_XYZW_OF_WXYZ]
+        return q
+
     def pin_to_mj(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Pinocchio (q, v) -> MuJoCo (qpos, qvel)."""
         if self.spec.planar:
@@ -163,7 +175,7 @@ class RobotModel:
     # ---------------------------------------------------------------- poses
     def nominal_joint_pos(self) -> np.ndarray:
         """Standing joint angles [rad] in actuator order."""
-        return np.array([self.spec.nominal_joint_pos_rad.get(n, 0.0) for n in self.joint_names])
+        return self._nominal_joint_pos.copy()
 
     def standing_qpos(
         self, x_m: float = 0.0, y_m: float = 0.0, ground_z_m: float = 0.0
