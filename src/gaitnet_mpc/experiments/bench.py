@@ -252,7 +252,7 @@ def export_revision(revision: str, folder: Path) -> Path:
     Raises:
         ConfigError: not a git checkout, or an unknown revision.
     """
-    repo = Path(__file__).resolve().parents[2]
+    repo = Path(__file__).resolve().parents[3]  # src/gaitnet_mpc/experiments/bench.py
     archive = subprocess.run(
         ["git", "-C", str(repo), "archive", "--format=tar", revision, "src"],
         capture_output=True,
