@@ -114,7 +114,9 @@ class StageWise:
             ubx[self.col_w[k]] = p.u[tie] if k < h - 1 else 1e3
         return H, g, np.vstack(rows), np.concatenate(lo), np.concatenate(hi), lbx, ubx
 
-    def casadi_solver(self, plugin: str, options: dict[str, Any], pattern: np.ndarray) -> Any:
+    def casadi_solver(self, plugin: str, options: dict[str, Any], a_sp: Any) -> Any:
+        """CasADi's ``conic`` with ``plugin`` on this form, ``a_sp`` the constraint rows'
+        sparsity."""
         import casadi as ca
 
         h = self.h
@@ -124,7 +126,6 @@ class StageWise:
             "nu": [NU] * h + [0],
             "ng": [2 * self.mw + 1] * h + [0],
         }
-        a_sp = ca.DM(sp.csc_matrix(pattern.astype(float))).sparsity()
         h_sp = ca.Sparsity.diag(self.n)
         return ca.conic(
             "qp", plugin, {"h": h_sp, "a": a_sp}, {**structure, **options, "error_on_fail": False}
@@ -165,10 +166,10 @@ def main() -> None:
         "fatrop (CasADi conic)": ("fatrop", {"structure_detection": "manual"}),
     }
     workspaces = {name: make_workspace("piqp", **opts) for name, opts in piqp_variants.items()}
-    solvers = {name: sw.casadi_solver(*v, pattern=pattern) for name, v in casadi_variants.items()}
-    rows: dict[str, list[tuple[float, int, float, bool]]] = {n: [] for n in [*workspaces, *solvers]}
     h_sp = ca.Sparsity.diag(sw.n)
     a_sp = ca.DM(sp.csc_matrix(pattern.astype(float))).sparsity()
+    solvers = {name: sw.casadi_solver(*v, a_sp=a_sp) for name, v in casadi_variants.items()}
+    rows: dict[str, list[tuple[float, int, float, bool]]] = {n: [] for n in [*workspaces, *solvers]}
     for p, (H, g, A, lba, uba, lbx, ubx) in zip(problems, converted, strict=True):
         reference = None  # interleaved: each QP by every variant before the next QP
         for name, ws in workspaces.items():

@@ -3,7 +3,7 @@
 This module holds the derivation, the geometry readers and the checked entry points; the
 per-row arithmetic runs compiled in :mod:`~gaitnet_mpc.kinematics.leg_ik_kernel` (a
 3-row whole-body IK: about 21 us against 85-125 us for the NumPy form it replaced,
-``benchmarks/results/perf.md``; the two agree to 3e-14 rad).
+``docs/design/realtime.md`` item 4; the two agree to 3e-14 rad).
 
 5-DoF humanoid leg (``humanoid3d``)
 ===================================

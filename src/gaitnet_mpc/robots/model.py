@@ -28,11 +28,6 @@ from gaitnet_mpc.robots.spec import FEET, RobotSpec
 _XYZW_OF_WXYZ = np.array([4, 5, 6, 3])  # qpos entries of Pinocchio's (x, y, z, w)
 
 
-def quat_wxyz_to_xyzw(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Reorder a quaternion from MuJoCo's (w, x, y, z) to Pinocchio's (x, y, z, w)."""
-    return np.asarray(quat_wxyz)[..., [1, 2, 3, 0]]
-
-
 def quat_xyzw_to_wxyz(quat_xyzw: np.ndarray) -> np.ndarray:
     """Reorder a quaternion from Pinocchio's (x, y, z, w) to MuJoCo's (w, x, y, z)."""
     return np.asarray(quat_xyzw)[..., [3, 0, 1, 2]]
@@ -140,8 +135,7 @@ class RobotModel:
         """MuJoCo (qpos, qvel) -> Pinocchio (q, v); see the module docstring."""
         if self.spec.planar:
             return np.array(qpos, dtype=float), np.array(qvel, dtype=float)
-        q = np.array(qpos, dtype=float)
-        q[3:7] = quat_wxyz_to_xyzw(qpos[3:7])
+        q = self.mj_to_pin_q(qpos)
         v = np.array(qvel, dtype=float)
         rot = quat_wxyz_to_matrix(qpos[3:7])
         v[0:3] = rot.T @ qvel[0:3]
