@@ -111,6 +111,7 @@ from gaitnet_mpc.mpc.centroidal_model import (
 )
 from gaitnet_mpc.mpc.contact import StanceWrenchRows
 from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask, tie_groups
+from gaitnet_mpc.mpc.kd_condensed import KDCondensed
 from gaitnet_mpc.mpc.kd_config import KDConfig
 from gaitnet_mpc.mpc.kd_inputs import KDInputs
 from gaitnet_mpc.mpc.kd_iterate import KDIterate, KDStep, KDTolerances
@@ -153,6 +154,13 @@ class KDSubproblem:
             raise ConfigError("contact", c.contact, "stance wrench rows of full column rank")
         self._build_patterns()
         self._build_cost_diag()
+        #: The condensed form's solver (``config.qp_form == "condensed"``), else None.
+        self.condensed: KDCondensed | None = None
+        if c.qp_form == "condensed":
+            n_sep = h if c.min_foot_separation_m is not None else 0
+            self.condensed = KDCondensed(lay, self.n_wrench_rows, n_sep)
+        #: Condensed solves that failed and were repeated on the sparse QP.
+        self.n_fallbacks = 0
 
     # ------------------------------------------------------------------ layout
     @property
@@ -452,7 +460,13 @@ class KDSubproblem:
             QPSolveError: the backend found no usable solution.
         """
         problem = self.build(iterate, inputs)
-        sol = self.workspace.solve_or_raise(problem)
+        sol = None
+        if self.condensed is not None:
+            wrench = np.stack([iterate.f, iterate.tau])
+            sol = self.condensed.solve(problem, wrench, iterate.p_foot, inputs.contact)
+            self.n_fallbacks += not sol.found  # then the sparse QP with qp_backend
+        if sol is None or not sol.found:
+            sol = self.workspace.solve_or_raise(problem)
         assert sol.x is not None  # found, so given
         parts = self.layout.unpack(sol.x)
         parts["delta_p_com"][0] = 0.0

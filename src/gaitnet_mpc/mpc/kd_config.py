@@ -44,6 +44,8 @@ BACKEND_OPTIONS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {"piqp": MappingProxyType({"eps_duality_gap_rel": 1e-12, "eps_duality_gap_abs": 1e-10})}
 )
 
+QP_FORMS = ("sparse", "condensed")  # KDConfig.qp_form
+
 _FOOT = "the CoP's reach from the foot centre; 0: a point foot; humanoid3d 0.075 m"
 _TRUST = "per axis about the iterate; None: off; 1 m is past any step"
 
@@ -100,6 +102,10 @@ class KDConfig:
     trust_region_com_m: float | None = bounded(None, "(0, 1] m", "a distance", _TRUST)
     qp_backend: str = "piqp"  # fastest here, see the module docstring
     qp_options: tuple[tuple[str, Any], ...] = ()
+    #: ``"sparse"``: the QP as built, solved by ``qp_backend``; ``"condensed"``: reduced
+    #: to its free variables and solved by DAQP (:mod:`~gaitnet_mpc.mpc.kd_condensed`),
+    #: with ``qp_backend`` on the sparse QP where DAQP fails.
+    qp_form: str = "sparse"
 
     def __post_init__(self) -> None:
         if not isinstance(self.horizon, int | np.integer):
@@ -109,6 +115,8 @@ class KDConfig:
         _size("w_pose", self.w_pose, 6)
         _size("w_p_foot", self.w_p_foot, 3)
         _size("w_p_com", self.w_p_com, 3)
+        if self.qp_form not in QP_FORMS:
+            raise ConfigError("qp_form", self.qp_form, f"one of {list(QP_FORMS)}")
         if self.qp_backend not in BACKENDS:
             raise ConfigError("qp_backend", self.qp_backend, f"one of {sorted(BACKENDS)}")
 
@@ -118,4 +126,4 @@ class KDConfig:
         return {**BACKEND_OPTIONS.get(self.qp_backend, {}), **dict(self.qp_options)}
 
 
-__all__ = ["BACKEND_OPTIONS", "KDConfig"]
+__all__ = ["BACKEND_OPTIONS", "QP_FORMS", "KDConfig"]
