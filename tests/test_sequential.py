@@ -343,3 +343,85 @@ def test_sequential_config_rejects_bad_settings() -> None:
     ):
         with pytest.raises(ConfigError, match=next(iter(kwargs))):
             SequentialConfig(**kwargs)  # type: ignore[arg-type]
+
+
+def _iterate(h: int, value: float):
+    from gaitnet_mpc.mpc.kd_iterate import KDIterate
+
+    rng = np.random.default_rng(int(value))
+    return KDIterate(
+        f=rng.normal(size=(h, 2, 3)) + value,
+        tau=rng.normal(size=(h, 2, 3)),
+        p_foot=rng.normal(size=(h, 2, 3)),
+        p_com=np.cumsum(rng.normal(size=(h + 1, 3)), axis=0),
+    )
+
+
+def test_shift_iterate_moves_the_plan_onto_the_new_horizon() -> None:
+    """Zero elapsed time, same grid: the previous plan (CoM start: the measurement).
+    One stage later: stage k is the previous stage k + 1, the last stage (past the old
+    horizon) and any foot whose contact changed take the fallback."""
+    from gaitnet_mpc.mpc.kd_iterate import shift_iterate
+
+    h = 6
+    dts = np.full(h, 0.05)
+    contact = np.ones((h, 2), dtype=bool)
+    contact[:3, 1] = False
+    prev, fallback = _iterate(h, 1.0), _iterate(h, 2.0)
+    same = shift_iterate(prev, dts, contact, 0.0, dts, contact, fallback)
+    np.testing.assert_array_equal(same.f, prev.f)
+    np.testing.assert_array_equal(same.p_foot, prev.p_foot)
+    np.testing.assert_allclose(same.p_com[1:], prev.p_com[1:])
+    np.testing.assert_array_equal(same.p_com[0], fallback.p_com[0])
+
+    new_contact = np.ones((h, 2), dtype=bool)
+    new_contact[:2, 1] = False
+    new_contact[4:, 0] = False  # the left foot lifts off in stages the old plan had stance
+    shifted = shift_iterate(prev, dts, contact, 0.05, dts, new_contact, fallback)
+    for k in range(h):
+        for i in range(2):
+            from_prev = k + 1 < h and contact[k + 1, i] == new_contact[k, i]
+            src = prev.tau[k + 1, i] if from_prev else fallback.tau[k, i]
+            np.testing.assert_array_equal(shifted.tau[k, i], src, err_msg=f"stage {k} foot {i}")
+    np.testing.assert_allclose(shifted.p_com[1:h], prev.p_com[2:])  # on the old grid
+    np.testing.assert_array_equal(shifted.p_com[h], fallback.p_com[h])  # past the old horizon
+
+
+def test_warm_started_replans_start_from_the_last_plan(humanoid) -> None:
+    """With ``warm_start_replans``, a replan's first QP starts near the last plan: its
+    search direction is far smaller than from ``KDIterate.initial`` (measured: foot and
+    CoM steps of a few mm against 0.1 m), and it still converges."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+
+    course, command = load_course("flat"), Command(vx_mps=0.5)
+    first_steps: dict[bool, list[float]] = {}
+    for warm in (False, True):
+        sim = Simulator(humanoid, course)
+        config = replace(KDWalkConfig(), warm_start_replans=warm)
+        ctrl = KDWalkController(humanoid, TerrainView(course), command, config=config)
+        sub, mpc = ctrl.mpc.subproblem, ctrl.mpc
+        solve, mpc_solve, steps, firsts = sub.solve, mpc.solve, [], []
+
+        def record(it, inputs, solve=solve, steps=steps):
+            steps.append(solve(it, inputs))
+            return steps[-1]
+
+        def first_step(problem, mpc_solve=mpc_solve, steps=steps, firsts=firsts):
+            steps.clear()
+            result = mpc_solve(problem)
+            if not problem.choose_dt:  # a replan
+                firsts.append(steps[0].max_delta_pos_m)
+                assert result.converged
+            return result
+
+        sub.solve, mpc.solve = record, first_step
+        state = sim.state()
+        ctrl.reset(state)
+        while state.t_s < 0.5:
+            sim.step(ctrl.compute(state))
+            state = sim.state()
+        first_steps[warm] = firsts
+    assert len(first_steps[True]) > 10
+    assert np.median(first_steps[True]) < 0.2 * np.median(first_steps[False])

@@ -392,6 +392,8 @@ class KDWalkController(WalkingBase):
             choose_dt=full,
             step_index=sched.step_index,
             state=StepState(state, stance, swing) if full else None,
+            warm_start=None if full or not self.config.warm_start_replans else self.plan,
+            t_s=state.t_s,
         )
         t0_s = time.perf_counter()
         try:

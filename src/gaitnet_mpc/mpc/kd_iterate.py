@@ -104,6 +104,53 @@ class KDIterate:
         return cls(f=f, tau=np.zeros((h, N_FEET, 3)), p_foot=p_foot_ref.copy(), p_com=p_com)
 
 
+def shift_iterate(
+    previous: KDIterate,
+    previous_dts_s: np.ndarray,
+    previous_contact: np.ndarray,
+    elapsed_s: float,
+    dts_s: np.ndarray,
+    contact: np.ndarray,
+    fallback: KDIterate,
+) -> KDIterate:
+    """The previous plan moved onto a new horizon that starts ``elapsed_s`` later: the
+    warm start of a replan (the shifted solution of a real-time iteration).
+
+    A stage takes the previous plan's wrench and foot position at its mid-time where the
+    previous horizon covers it and the foot's contact there agrees; else the foot keeps
+    ``fallback``'s (:meth:`KDIterate.initial`). The CoM path is the previous one
+    interpolated at the new stage boundaries, ``fallback``'s past the previous horizon,
+    and ``fallback.p_com[0]`` (the measurement) at the start.
+
+    Args:
+        previous: the last plan's iterate; previous_dts_s (h,), previous_contact (h, 2):
+            its stage durations [s] and stance mask.
+        elapsed_s: time from the start of the previous horizon to the new one [s].
+        dts_s (h,), contact (h, 2): the new horizon's.
+        fallback: the iterate used where the previous plan says nothing.
+    """
+    t_prev = np.concatenate([[0.0], np.cumsum(previous_dts_s)])  # (h'+1,) boundaries
+    t_new = elapsed_s + np.concatenate([[0.0], np.cumsum(dts_s)])  # (h+1,)
+    mid = 0.5 * (t_new[:-1] + t_new[1:])
+    j = np.searchsorted(t_prev, mid, side="right") - 1  # previous stage of each new one
+    inside = (j >= 0) & (j < previous_dts_s.size)
+    j = np.clip(j, 0, previous_dts_s.size - 1)
+    same = inside[:, None] & (previous_contact[j] == contact)  # (h, 2)
+    keep = same[:, :, None]
+    p_com = fallback.p_com.copy()
+    covered = t_new[1:] <= t_prev[-1]
+    for a in range(3):
+        p_com[1:, a] = np.where(
+            covered, np.interp(t_new[1:], t_prev, previous.p_com[:, a]), p_com[1:, a]
+        )
+    return KDIterate(
+        f=np.where(keep, previous.f[j], fallback.f),
+        tau=np.where(keep, previous.tau[j], fallback.tau),
+        p_foot=np.where(keep, previous.p_foot[j], fallback.p_foot),
+        p_com=p_com,
+    )
+
+
 @dataclass(frozen=True)
 class KDStep:
     """Solution of one CMPC sub-problem.
@@ -140,4 +187,4 @@ class KDStep:
         )
 
 
-__all__ = ["KDIterate", "KDStep", "KDTolerances"]
+__all__ = ["KDIterate", "KDStep", "KDTolerances", "shift_iterate"]

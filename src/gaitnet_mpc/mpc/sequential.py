@@ -52,6 +52,7 @@ from gaitnet_mpc.mpc.implicit_kd import (
     KDSubproblem,
     KDTolerances,
 )
+from gaitnet_mpc.mpc.kd_iterate import shift_iterate
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -113,6 +114,10 @@ class KDProblem:
         state: the measured state with the stance and swing foot of the step, for a dt
             policy that reads more than ``q`` and ``v`` (Gait-Net's features); None if the
             caller gives none.
+        warm_start: a previous plan (its ``t_plan_s`` on the clock of ``t_s``) to start
+            the iterations from, shifted to this horizon (:func:`shift_iterate`); None:
+            :meth:`KDIterate.initial`.
+        t_s: time of the measurement [s] (read with ``warm_start`` only).
     """
 
     q: np.ndarray
@@ -131,6 +136,8 @@ class KDProblem:
     choose_dt: bool = False
     step_index: int = 0
     state: StepState | None = None
+    warm_start: SequentialResult | None = None
+    t_s: float = 0.0
 
 
 class DtPolicy(Protocol):
@@ -333,6 +340,27 @@ class SequentialKDMPC:
             ref, h_ref, pose_ref, p_com_ref, h_lin_ref, pose_lin_ref, com is not None
         )
 
+    def _f_ik(
+        self,
+        r: _References,
+        iterate: KDIterate,
+        dts: np.ndarray,
+        contact: np.ndarray,
+        pf_ref: np.ndarray,
+    ) -> tuple[_References, np.ndarray, np.ndarray, np.ndarray]:
+        """Line 9: the references re-made from ``iterate`` (f_IK), with eq. 18's tracked
+        momentum, pose and foot references."""
+        cfg = self.config
+        ref = update_reference(self.robot, r.ref, iterate.p_foot, iterate.p_com, dts)
+        r = replace(r, ref=ref)
+        h_ref, pose_ref = ref.h_ref, ref.H_ref
+        if cfg.linear_reference_from_command or r.com_override:
+            h_ref = np.hstack([r.h_lin_ref, ref.h_ref[:, 3:]])
+            pose_ref = np.hstack([r.pose_lin_ref, ref.H_ref[:, 3:]])
+        if cfg.update_foot_reference:
+            pf_ref = mpc_foot_reference(ref, contact)
+        return r, h_ref, pose_ref, pf_ref
+
     def _next_dt(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
         """Line 8: the policy's dt for the step, clipped into ``dt_bounds_s`` [s]."""
         lo, hi = self.config.dt_bounds_s
@@ -364,6 +392,13 @@ class SequentialKDMPC:
         pf_ref = mpc_foot_reference(r.ref, contact)
         h_ref, pose_ref = r.h_ref, r.pose_ref
         iterate = KDIterate.initial(com0, r.p_com_ref, pf_ref, contact, mass)
+        prev = problem.warm_start
+        if prev is not None:
+            iterate = shift_iterate(
+                prev.iterate, prev.dts_s, prev.contact, problem.t_s - prev.t_plan_s, dts,
+                contact, iterate,
+            )  # fmt: skip
+            r, h_ref, pose_ref, pf_ref = self._f_ik(r, iterate, dts, contact, pf_ref)
         step: KDStep | None = None
         converged = False
         n_qps = 0
@@ -400,14 +435,7 @@ class SequentialKDMPC:
                 break
             if n_qps == j_max:  # no QP follows: line 9 would re-make references unused
                 break
-            ref = update_reference(robot, r.ref, iterate.p_foot, iterate.p_com, dts)
-            r = replace(r, ref=ref)
-            h_ref, pose_ref = ref.h_ref, ref.H_ref
-            if cfg.linear_reference_from_command or r.com_override:
-                h_ref = np.hstack([r.h_lin_ref, ref.h_ref[:, 3:]])
-                pose_ref = np.hstack([r.pose_lin_ref, ref.H_ref[:, 3:]])
-            if cfg.update_foot_reference:
-                pf_ref = mpc_foot_reference(ref, contact)
+            r, h_ref, pose_ref, pf_ref = self._f_ik(r, iterate, dts, contact, pf_ref)
         return SequentialResult(
             iterate=iterate,
             reference=r.ref,
