@@ -2,7 +2,7 @@
 
 Run::
 
-    .venv/bin/python benchmarks/kd_qp_condensed.py      # ~1 min, 2 cores
+    .venv/bin/python benchmarks/kd_qp_condensed.py      # ~4 min, 2 cores
 
 1. Recording: ``gaitnet`` walks ``humanoid3d`` at 0.75 m/s on ``flat`` and on the seeded
    ``gap`` course (seed 3, foothold boxes of eq. 24 in play) for ``--seconds`` each;
@@ -57,7 +57,7 @@ def record(course: str, seconds: float) -> tuple[Any, list[tuple[Any, ...]]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=2.0)
+    parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--rounds", type=int, default=3)
     add_out_option(parser, "kd_qp_condensed.md")
     args = parser.parse_args()

@@ -59,7 +59,7 @@ def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> 
     default = _default_walk_config(planar)
     assert load_preset(KDWalkConfig, "kd", "default", planar) == default
     realtime = load_preset(KDWalkConfig, "kd", "realtime", planar)
-    assert realtime == replace(default, replan_j_max=1)
+    assert realtime == replace(default, replan_j_max=1, warm_start_replans=True)
     assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config_before(planar)
     assert load_preset(SRBMWalkConfig, "srbm", "default", planar) == SRBMWalkConfig()
 

@@ -285,11 +285,12 @@ def test_backends_agree_on_one_subproblem() -> None:
     args, pc0 = walking_problem()
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
     steps = {
-        be: (sub := KDSubproblem(KDConfig(mass_kg=MASS, qp_backend=be))).solve(
+        be: (sub := KDSubproblem(KDConfig(mass_kg=MASS, qp_backend=be, qp_form="sparse"))).solve(
             it, sub.inputs(it, **args)
         )
         for be in ("piqp", "osqp", "clarabel", "daqp")
     }
+    steps["condensed"] = KDSubproblem(KDConfig(mass_kg=MASS)).solve(it, sub.inputs(it, **args))
     ref = steps.pop("piqp")
     for step in steps.values():
         np.testing.assert_allclose(step.delta_f, ref.delta_f, atol=2e-2)

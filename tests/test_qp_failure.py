@@ -2,8 +2,9 @@
 torques stay finite, and the failures are counted in its MPC statistics (as failed solves,
 apart from solves that merely did not converge).
 
-The backend's ``_solve`` is replaced (for the backend class the controller's settings name)
-by one that, inside a window of simulated time, either reports a failed status or raises;
+The backend's ``_solve`` is replaced (for the backend class the controller's settings name;
+for ``kd`` the condensed DAQP solve as well, whose failures fall back to that backend) by
+one that, inside a window of simulated time, either reports a failed status or raises;
 :meth:`QPWorkspace.solve` turns the exception into a ``"numerical_error"`` status and
 :meth:`QPWorkspace.solve_or_raise` into a :class:`QPSolveError`, which the controller
 catches. Outside the window the real backend runs.
@@ -64,6 +65,18 @@ def test_failed_qp_keeps_last_plan_and_is_counted(
         return BackendResult(None, "infeasible", "injected failure")
 
     monkeypatch.setattr(backend, "_solve", flaky_solve)
+    if controller == "kd":  # the condensed form fails too, so the sparse backend is called
+        from gaitnet_mpc.mpc.kd_condensed import KDCondensed
+
+        real_condensed = KDCondensed.solve
+
+        def flaky_condensed(self: Any, problem: Any, *args: Any) -> Any:
+            sol = real_condensed(self, problem, *args)
+            if window["on"]:
+                sol.found, sol.status = False, "infeasible"
+            return sol
+
+        monkeypatch.setattr(KDCondensed, "solve", flaky_condensed)
     # the MPC solves the injected failures made fail (a solve may call the backend more
     # than once, e.g. kd's dt search; each failed MPC solve raises QPSolveError once)
     real_mpc_solve = ctrl.mpc.solve

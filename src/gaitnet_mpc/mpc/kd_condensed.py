@@ -32,6 +32,12 @@ eliminated variables' values, so the minimiser is the same (checked against PIQP
 recorded problems in ``tests/test_kd_condensed.py``). ``M`` comes from a forward
 substitution over the stages with ``n_u + 1`` right-hand sides; products with the input
 rows of ``M`` (copies of ``u``) are gathers and sums, not matrix products.
+
+The remaining products (``M_S^T P_S M_S``: 66 x 150 x 66) are small enough that
+OpenBLAS's threads cost more than they save: on this 2-core machine, loaded by another
+process, a condensing took 6 ms with two BLAS threads and 0.6 ms with one. :meth:`solve`
+therefore runs with BLAS limited to one thread (``threadpoolctl``, ~10 us per solve) and
+restores the process's setting afterwards.
 """
 
 from __future__ import annotations
@@ -41,6 +47,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from gaitnet_mpc.errors import ConfigError, reraise_interrupt
 from gaitnet_mpc.mpc.centroidal_model import N_FEET, NX
@@ -61,6 +68,43 @@ _CACHE_SIZE = 64  # condensing structures kept, keyed by contact schedule and fi
 _SOLVED = {1: "solved", 2: "solved_inaccurate"}
 
 
+def _dense(shape: tuple[int, ...], put: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """A zero array of ``shape`` with ``values`` at the flat positions ``put``."""
+    out = np.zeros(shape)
+    out.reshape(-1)[put] = values
+    return out
+
+
+@dataclass(frozen=True)
+class _Pattern:
+    """Row and column of each stored entry of a CSC matrix, in ``data`` order."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    shape: tuple[int, int]
+
+    @classmethod
+    def empty(cls) -> _Pattern:
+        none = np.zeros(0, dtype=np.int64)
+        return cls(none, none, none, none, (0, 0))
+
+    @classmethod
+    def of(cls, a: Any) -> _Pattern:
+        cols = np.repeat(np.arange(a.shape[1]), np.diff(a.indptr))
+        return cls(a.indptr.copy(), a.indices.copy(), a.indices.astype(np.int64), cols, a.shape)
+
+    def matches(self, a: Any) -> bool:
+        """Whether ``a`` has this pattern (cheap checks first)."""
+        return (
+            a.shape == self.shape
+            and a.indices.size == self.indices.size
+            and np.array_equal(a.indptr, self.indptr)
+            and np.array_equal(a.indices, self.indices)
+        )
+
+
 @dataclass(frozen=True)
 class _Structure:
     """What the eliminations of one contact schedule and one set of fixed axes keep.
@@ -77,7 +121,9 @@ class _Structure:
         u_start: (n_u,) first entry of each ``u`` in ``by_u``;
         u_source: (n_u,) input position whose box bounds ``u``;
         rows: kept inequality rows (stance wrench rows, separation rows);
-        n_u: number of condensed variables.
+        n_u: number of condensed variables;
+        a_take, a_put: the entries of ``A.data`` in kept rows and input columns, and their
+            flat positions in the dense (kept rows, n_I) block.
     """
 
     free: np.ndarray
@@ -88,6 +134,8 @@ class _Structure:
     u_source: np.ndarray
     rows: np.ndarray
     n_u: int
+    a_take: np.ndarray
+    a_put: np.ndarray
 
     def times_m_input(self, a: np.ndarray) -> np.ndarray:
         """``a @ M_I`` for ``a`` (r, n_I)."""
@@ -168,6 +216,35 @@ class KDCondensed:
         self._n_w = 2 * h * N_FEET * 3  # inputs that are wrench entries
         self._cache: dict[bytes, _Structure] = {}
         self.n_structures = 0  # structures built (cache misses)
+        self._input_pos = np.full(lay.n, -1)  # column -> position in I
+        self._input_pos[self.cols_i] = np.arange(self.n_i)
+        self._a_pattern = _Pattern.empty()  # of the sparse QP's A_eq and A, on first use
+        self._eq_pattern = _Pattern.empty()
+        # BLAS on one thread during a solve (module docstring): its products are small
+        self._blas = ThreadpoolController()
+
+    def _patterns(self, problem: QPProblem) -> None:
+        """Read the (fixed) sparsity patterns of ``A_eq`` and ``A`` on the first call; the
+        scatter maps of the dense blocks depend on them."""
+        assert problem.A_eq is not None and problem.A is not None
+        if self._eq_pattern.matches(problem.A_eq) and self._a_pattern.matches(problem.A):
+            return
+        self._cache.clear()
+        self._a_pattern = _Pattern.of(problem.A)
+        eq = self._eq_pattern = _Pattern.of(problem.A_eq)
+        # A_I (m_eq, n_I): every entry in an input column
+        c = self._input_pos[eq.cols]
+        self._eq_i_take = np.flatnonzero(c >= 0)
+        self._eq_i_put = eq.rows[self._eq_i_take] * self.n_i + c[self._eq_i_take]
+        # sub-diagonal blocks (h, NS, NS): rows of stage k + 1 on the states of stage k
+        state_pos = np.full(self.layout.n, -1)
+        state_pos[self.cols_s] = np.arange(self.cols_s.size)
+        s_pos = state_pos[eq.cols]
+        k = eq.rows // _NS - 1  # the stage whose states the row's stage reads
+        lower = (s_pos >= 0) & (k >= 0) & (s_pos // _NS == k)
+        self._eq_l_take = np.flatnonzero(lower)
+        rk, sk = eq.rows[lower], s_pos[lower]
+        self._eq_l_put = ((rk // _NS - 1) * _NS + rk % _NS) * _NS + sk % _NS
 
     # ------------------------------------------------------------------ structure
     def _structure(self, contact: np.ndarray, fixed_pf: np.ndarray) -> _Structure:
@@ -203,7 +280,14 @@ class KDCondensed:
         sep0 = h * N_FEET * mw + N_FEET * 3 * (h - 1)
         rows = np.concatenate([wrench_rows, sep0 + np.arange(self.n_sep_rows)])
         n_u = u_start.size
-        found = _Structure(free, base, by_u, u_start, u_of_input, np.flatnonzero(owner), rows, n_u)
+        row_pos = np.full(self._a_pattern.shape[0], -1)
+        row_pos[rows] = np.arange(rows.size)
+        r, c = row_pos[self._a_pattern.rows], self._input_pos[self._a_pattern.cols]
+        take = np.flatnonzero((r >= 0) & (c >= 0))
+        found = _Structure(
+            free, base, by_u, u_start, u_of_input, np.flatnonzero(owner), rows, n_u,
+            take, r[take] * self.n_i + c[take],
+        )  # fmt: skip
         if len(self._cache) >= _CACHE_SIZE:
             self._cache.pop(next(iter(self._cache)))
         self._cache[key] = found
@@ -228,6 +312,7 @@ class KDCondensed:
 
         """
         assert problem.A_eq is not None and problem.b_eq is not None and problem.A is not None
+        self._patterns(problem)
         lb, ub = problem.box_bounds()
         cols_i, cols_s = self.cols_i, self.cols_s
         lb_i, ub_i = lb[cols_i], ub[cols_i]
@@ -243,16 +328,17 @@ class KDCondensed:
         m_i[self._n_w :] = np.where(fixed_pf[base_pf], m_pf + lb_i[self._n_w :][base_pf], m_pf)
         # states: A_S z_S = b - A_I z_I, A_S block lower bidiagonal with identity diagonal
         # blocks (stage k + 1's rows read stage k's states only)
-        a_eq = problem.A_eq.toarray()
-        a_i = a_eq[:, cols_i]
-        rhs = np.empty((a_eq.shape[0], n_u + 1))
+        m_eq, h = problem.b_eq.size, self.layout.horizon
+        eq_data = problem.A_eq.data
+        a_i = _dense((m_eq, self.n_i), self._eq_i_put, eq_data[self._eq_i_take])
+        lower = _dense((h, _NS, _NS), self._eq_l_put, eq_data[self._eq_l_take])
+        rhs = np.empty((m_eq, n_u + 1))
         rhs[:, :-1] = -st.times_m_input(a_i)
         rhs[:, -1] = problem.b_eq - a_i @ m_i
         sol = rhs  # forward substitution in place, stage by stage
         b = _NS
-        for k in range(self.layout.horizon):
-            rows_next, cols_k = slice(b * (k + 1), b * (k + 2)), cols_s[b * k : b * (k + 1)]
-            sol[rows_next] -= a_eq[rows_next][:, cols_k] @ sol[b * k : b * (k + 1)]
+        for k in range(h):
+            sol[b * (k + 1) : b * (k + 2)] -= lower[k] @ sol[b * k : b * (k + 1)]
         m_s, m_mat_s = sol[:, -1], sol[:, :-1]
         # cost: M^T P M = M_I^T P_I M_I (diagonal) + M_S^T P_S M_S; states 0 are fixed
         p_diag = problem.P.diagonal()
@@ -264,7 +350,7 @@ class KDCondensed:
         g_s = p_s * m_s + problem.q[cols_s]
         grad = np.add.reduceat(g_i[st.by_u], st.u_start) + m_mat_s.T @ g_s
         # rows: kept inequality rows (inputs only), then finite boxes on states
-        a_in = problem.A.toarray()[st.rows][:, cols_i]
+        a_in = _dense((st.rows.size, self.n_i), st.a_put, problem.A.data[st.a_take])
         l_in, u_in = problem.ineq_bounds()
         shift = a_in @ m_i
         g_rows = [st.times_m_input(a_in)]
@@ -304,8 +390,9 @@ class KDCondensed:
         condensing.
         """
         start = time.perf_counter()
-        dense = self.condense(problem, wrench_iterate, p_foot_iterate, contact)
-        u, _fval, exitflag, info = daqp.solve(**dense.qp, **self.options)
+        with self._blas.limit(limits=1, user_api="blas"):
+            dense = self.condense(problem, wrench_iterate, p_foot_iterate, contact)
+            u, _fval, exitflag, info = daqp.solve(**dense.qp, **self.options)
         status = _SOLVED.get(int(exitflag), "numerical_error" if exitflag != -1 else "infeasible")
         x = dense.expand(u) if status in _SOLVED.values() and np.all(np.isfinite(u)) else None
         if x is None and status in _SOLVED.values():

@@ -1,7 +1,11 @@
 """Parameters of the CMPC sub-problem (paper Tables VIII and X) and its QP backend.
 
-Backend timing (default ``qp_backend="piqp"``)
-----------------------------------------------
+Backend timing (``qp_form="sparse"``, ``qp_backend="piqp"``)
+----------------------------------------------------------
+Since 2026-12-05 the QP is condensed by default (``qp_form="condensed"``, DAQP on 62-100
+variables, ``benchmarks/results/kd_qp_condensed.md``: 0.8 ms per QP against PIQP's 2.0 ms
+in one run). The sparse form's backends, measured before that:
+
 QP: n = 33 h + 15 = 345 variables, 15 h + 15 = 165 equality rows (nnz 975), 254
 inequality rows (20 x 10 line-foot wrench rows + 54 tie rows, nnz 1308; 8 rows per foot
 and stage for point feet), a box on all 345 variables, diagonal P (333 nonzeros).
@@ -102,10 +106,11 @@ class KDConfig:
     trust_region_com_m: float | None = bounded(None, "(0, 1] m", "a distance", _TRUST)
     qp_backend: str = "piqp"  # fastest here, see the module docstring
     qp_options: tuple[tuple[str, Any], ...] = ()
-    #: ``"sparse"``: the QP as built, solved by ``qp_backend``; ``"condensed"``: reduced
-    #: to its free variables and solved by DAQP (:mod:`~gaitnet_mpc.mpc.kd_condensed`),
-    #: with ``qp_backend`` on the sparse QP where DAQP fails.
-    qp_form: str = "sparse"
+    #: ``"condensed"``: reduced to its free variables and solved by DAQP
+    #: (:mod:`~gaitnet_mpc.mpc.kd_condensed`; 2.5x faster than the sparse QP with PIQP,
+    #: the same minimiser), with ``qp_backend`` on the sparse QP where DAQP fails;
+    #: ``"sparse"``: the QP as built, solved by ``qp_backend``.
+    qp_form: str = "condensed"
 
     def __post_init__(self) -> None:
         if not isinstance(self.horizon, int | np.integer):
