@@ -514,7 +514,7 @@ def test_default_layouts_unchanged() -> None:
 
 
 def test_seeded_courses_are_the_ones_taking_a_seed() -> None:
-    assert SEEDED_COURSES == {"uneven", "stepping-stones", "gap"}
+    assert SEEDED_COURSES == {"uneven", "stepping-stones", "gap", "obstacle"}
 
 
 @pytest.mark.parametrize("name", sorted(SEEDED_COURSES))

@@ -209,6 +209,7 @@ class KDWalkController(WalkingBase):
                 reach_back_m=self.config.foothold_reach_back_m,
                 margin_m=self.config.foothold_margin_m,
                 margin_y_m=self.config.foothold_margin_y_m,
+                obstacle_clearance_m=self.config.foothold_obstacle_clearance_m,
             )
         r = self.robot.spec.foot_contact_radius_m
         lo, hi = lo.copy(), hi.copy()

@@ -92,8 +92,14 @@ class KDWalkConfig:
         default_factory=lambda: SequentialConfig(kd=walking_kd_config())
     )
     low_level: LowLevelConfig = field(default_factory=walking_low_level_config)
+    # clearance_m: 2 cm above an obstacle's top for the sole, plus the 1 cm from the
+    # foot point (the foot box's centre) down to the sole (SwingConfig's rule). With 2 cm
+    # for the foot point the heel of a 0.3 m step clipped the built-in obstacle's far
+    # corner (sole 1 cm above the top on the plan, 1 cm tracking lag along x).
     swing: SwingConfig = field(
-        default_factory=lambda: SwingConfig(touchdown_speed_mps=0.1, foot_half_length_m=0.075)
+        default_factory=lambda: SwingConfig(
+            touchdown_speed_mps=0.1, foot_half_length_m=0.075, clearance_m=0.03
+        )
     )
     # Eq. 24 boxes shrink by this inside each patch: the whole foot (toe and heel 0.075 m
     # from its centre) on the patch, plus 5 mm for the landing error (within +-4 mm with
@@ -115,6 +121,12 @@ class KDWalkConfig:
     foothold_margin_y_m: float = bounded(
         0.03, "[0, 0.1] m", "a margin", "under half the narrowest built-in stone, 0.20 m"
     )
+    # The eq. 24 box keeps this much more from a known obstacle's side than from a patch's
+    # edge (terrain/landing.py): at an edge the toe may overhang by the landing error, at
+    # an obstacle it would press on its side. 2 cm: the swing's clearance above a top.
+    foothold_obstacle_clearance_m: float = bounded(
+        0.02, "[0, 0.3] m", "a margin", "0.3 m is longer than a step"
+    )
     # |x_foot - x_com| at touchdown within which the reach rule considers a patch [m].
     # 0.2 (until 2026-12) left the next stone out of reach behind a platform's edge, so the
     # robot took a zero-length step there and then a long one it could not stop from.
@@ -131,6 +143,11 @@ class KDWalkConfig:
     # it keeps its aim, so that a last-moment change does not jerk the foot just before it
     # lands. Set when the retargeting was written, not tuned.
     retarget_until_phase: float = bounded(0.85, "(0, 1]", "a phase", "a fraction of the step")
+    # The one-step preview holds the obstacles between lift-off and touchdown (box and
+    # height: swings clear them, touchdown boxes keep off them); False: the robot does not
+    # see them, as on the paper's hardware (Fig. 1(e)). Recorded as
+    # terrain_knowledge.obstacle_heights.
+    obstacle_heights: bool = True
     # Obstacles the swing trajectory clears: those from this far behind the lift-off to
     # this far beyond the target, along x [m] (behind, ahead); the foot is 0.15 m long.
     swing_obstacle_window_m: tuple[float, float] = bounded(
@@ -240,4 +257,7 @@ KD_PRESETS = {name: partial(load_preset, KDWalkConfig, "kd", name) for name in p
 def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
     """The terrain view ``config`` needs: the one-step preview, or with ``config.preview``
     the multi-step one."""
-    return TerrainView(course, TerrainKnowledge(multi_step=config.preview is not None))
+    knowledge = TerrainKnowledge(
+        multi_step=config.preview is not None, obstacle_heights=config.obstacle_heights
+    )
+    return TerrainView(course, knowledge)

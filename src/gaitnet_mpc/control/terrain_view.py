@@ -76,8 +76,14 @@ class TerrainView:
         margin_m: float,
         margin_y_m: float | None = None,
         reach_back_m: float | None = None,
+        obstacle_clearance_m: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
-        """Eq. 24 box of the next touchdown: :meth:`Course.reachable_foothold_bounds`."""
+        """Eq. 24 box of the next touchdown: :meth:`Course.reachable_foothold_bounds`.
+
+        Where the obstacles are known (``knowledge.obstacle_heights``), the box lies off
+        them, their footprints widened by ``obstacle_clearance_m``; otherwise the patches
+        are taken as they are."""
+        known = self.knowledge.obstacle_heights
         return self._course.reachable_foothold_bounds(
             p_com_touchdown_xy,
             foot,
@@ -86,6 +92,7 @@ class TerrainView:
             margin_m=margin_m,
             margin_y_m=margin_y_m,
             reach_back_m=reach_back_m,
+            obstacle_clearance_m=obstacle_clearance_m if known else None,
         )
 
     def swing_obstacles(self, x0_m: float, x1_m: float) -> list[Obstacle]:

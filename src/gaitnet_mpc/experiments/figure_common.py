@@ -56,7 +56,7 @@ CSV_FIELDS = {
     "fig10": "controller t_s t_since_contact_s com_x_m cart_x_m cart_vx_mps hand_push_n "
     "max_tau_ratio",
     "fig11": "controller t_s com_x_m com_vx_mps cmd_vx_mps ramped_cmd_vx_mps com_over_gap",
-    "obstacle": "kind t_s foot x_m sole_z_m over_obstacle allowed",
+    "obstacle": "case kind t_s foot x_m sole_z_m over_obstacle allowed",
 }
 _TOUCHDOWN_STYLE = {"s": 34, "edgecolors": "white", "linewidths": 0.5, "zorder": 3}
 

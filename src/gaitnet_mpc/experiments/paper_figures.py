@@ -94,7 +94,8 @@ FIGURES: dict[str, str] = {
     "fig9": "gaitnet's step durations under a push, a payload and uneven ground (Fig. 9)",
     "fig10": "pushing a cart with an unknown 35 kg load, srbm and gaitnet; largest load (Fig. 10)",
     "fig11": "x-velocity tracking over a 20 cm gap, gaitnet and kd (Fig. 11)",
-    "obstacle": "over a 3 cm obstacle and a 15 cm hole: swing-foot clearance (Fig. 1(e))",
+    "obstacle": "over a 3 cm obstacle and a 15 cm hole at 0.5 and 0.75 m/s, obstacle known "
+    "and unknown, then 20 seeded obstacle courses: swing-foot clearance (Fig. 1(e))",
 }
 _EXTRA = {"fig7": ("fig7_strip.png",), "fig10": ("fig10_loads.jsonl",)}
 #: What each figure writes into its folder (what an ``--overwrite`` may replace).

@@ -2,7 +2,8 @@
 their registry, and :func:`load_course` (a built-in name or a course file).
 
 Every built-in course runs from x = -1 m to x = 25 m on platforms 3 m wide (y in
-[-1.5, 1.5] m); ``gap``, ``stepping-stones`` and ``uneven`` can be drawn from a seed
+[-1.5, 1.5] m); ``gap``, ``stepping-stones``, ``obstacle`` and ``uneven`` can be drawn
+from a seed
 (:data:`SEEDED_COURSES`).
 """
 
@@ -285,24 +286,86 @@ def stepping_stones_course(dz_m: float = 0.02, seed: int | None = None) -> Cours
     return Course("stepping-stones", tuple(patches), seed=seed)
 
 
+#: Randomised ``obstacle`` layouts (integer millimetres): sections, first box start, box
+#: length and height, ground from a box to its hole, hole width, and ground from a hole to
+#: the next box. The ground after a box is at least 0.25 m so that a foot fits between a
+#: box and its hole (a foot centre keeps 0.10 m from a box and 0.08 m from an edge, the
+#: eq. 24 margins of ``kd``, and the foot is 0.15 m long).
+_RO_COUNT = (1, 3)
+_RO_X0_MM = (1000, 1500)
+_RO_LENGTH_MM = (50, 150)
+_RO_HEIGHT_MM = (20, 60)
+_RO_TO_HOLE_MM = (250, 450)
+_RO_HOLE_MM = (100, 200)
+_RO_GROUND_MM = (500, 900)
+
+
 def obstacle_course(
-    height_m: float = 0.03, x_m: float = 1.5, gap_x_m: float = 2.2, gap_width_m: float = 0.15
+    height_m: float | None = None,
+    x_m: float | None = None,
+    gap_x_m: float | None = None,
+    gap_width_m: float | None = None,
+    seed: int | None = None,
 ) -> Course:
-    """``obstacle``: a 0.10 m (x) by ``height_m`` box across the walkway centred at ``x_m``,
-    then a hole of ``gap_width_m`` starting at ``gap_x_m``, then ground to x = 25 m.
+    """``obstacle``: boxes across the walkway, each followed by a hole (the paper's
+    Fig. 1(e)), then ground to x = 25 m.
+
+    Without ``seed``: one 0.10 m (x) box of ``height_m`` (default 0.03 m) centred at
+    ``x_m`` (default 1.5 m), then a hole of ``gap_width_m`` (default 0.15 m) from
+    ``gap_x_m`` (default 2.2 m). With ``seed`` (a non-negative integer),
+    ``numpy.random.default_rng(seed)`` draws 1 to 3 sections (equally likely), in whole
+    millimetres: a box 0.05-0.15 m long and 0.02-0.06 m high (the first starts uniformly
+    in [1.0, 1.5] m), 0.25-0.45 m of ground, a hole 0.10-0.20 m wide, then 0.5-0.9 m of
+    ground before the next box; all uniform, so the last hole ends before x = 5.7 m
+    (8 s at 0.75 m/s).
+    Parameters together with a seed are refused (the seed draws them). The course
+    records ``seed``.
     """
-    height_m = _param(height_m, "obstacle.height_m", 0.0, 0.5, "a height in (0, 0.5) m")
-    x_m = _param(x_m, "obstacle.x_m", 0.1, 15.0, "an obstacle position in (0.1, 15) m")
-    gap_x_m = _param(gap_x_m, "obstacle.gap_x_m", x_m + 0.05, 15.0, f"a gap start > {x_m + 0.05}")
-    gap_width_m = _param(gap_width_m, "obstacle.gap_width_m", 0.0, 5.0, "a width in (0, 5) m")
-    patches = (
-        _platform(_COURSE_X_START_M, gap_x_m),
-        _platform(gap_x_m + gap_width_m, _COURSE_X_END_M),
-    )
-    box = Obstacle(
-        x_m - 0.05, x_m + 0.05, -_PLATFORM_HALF_WIDTH_M, _PLATFORM_HALF_WIDTH_M, height_m, 0.0
-    )
-    return Course("obstacle", patches, (box,))
+    seed = layout_seed(seed, "obstacle.seed")
+    if seed is not None:
+        given = (("height_m", height_m), ("x_m", x_m), ("gap_x_m", gap_x_m),
+                 ("gap_width_m", gap_width_m))  # fmt: skip
+        for name, value in given:
+            if value is not None:
+                raise CourseFormatError(
+                    f"obstacle.{name}", value, "no value together with a seed (the seed draws it)"
+                )
+        rng = np.random.default_rng(seed)
+        boxes_mm: list[tuple[int, int, int]] = []
+        holes_mm: list[tuple[int, int]] = []
+        x0 = _draw_mm(rng, _RO_X0_MM)
+        for _ in range(_draw_mm(rng, _RO_COUNT)):
+            x1 = x0 + _draw_mm(rng, _RO_LENGTH_MM)
+            boxes_mm.append((x0, x1, _draw_mm(rng, _RO_HEIGHT_MM)))
+            h0 = x1 + _draw_mm(rng, _RO_TO_HOLE_MM)
+            holes_mm.append((h0, h0 + _draw_mm(rng, _RO_HOLE_MM)))
+            x0 = holes_mm[-1][1] + _draw_mm(rng, _RO_GROUND_MM)
+        boxes = [(a / 1000.0, b / 1000.0, h / 1000.0) for a, b, h in boxes_mm]
+        holes = [(a / 1000.0, b / 1000.0) for a, b in holes_mm]
+    else:
+        height_m = _param(
+            0.03 if height_m is None else height_m, "obstacle.height_m", 0.0, 0.5,
+            "a height in (0, 0.5) m",
+        )  # fmt: skip
+        x_m = _param(
+            1.5 if x_m is None else x_m, "obstacle.x_m", 0.1, 15.0,
+            "an obstacle position in (0.1, 15) m",
+        )  # fmt: skip
+        gap_x_m = _param(
+            2.2 if gap_x_m is None else gap_x_m, "obstacle.gap_x_m", x_m + 0.05, 15.0,
+            f"a gap start > {x_m + 0.05}",
+        )  # fmt: skip
+        gap_width_m = _param(
+            0.15 if gap_width_m is None else gap_width_m, "obstacle.gap_width_m", 0.0, 5.0,
+            "a width in (0, 5) m",
+        )  # fmt: skip
+        boxes = [(x_m - 0.05, x_m + 0.05, height_m)]
+        holes = [(gap_x_m, gap_x_m + gap_width_m)]
+    edges = [_COURSE_X_START_M, *(x for hole in holes for x in hole), _COURSE_X_END_M]
+    patches = tuple(_platform(edges[i], edges[i + 1]) for i in range(0, len(edges), 2))
+    w = _PLATFORM_HALF_WIDTH_M
+    obstacles = tuple(Obstacle(a, b, -w, w, h, 0.0) for a, b, h in boxes)
+    return Course("obstacle", patches, obstacles, seed=seed)
 
 
 def uneven_course(

@@ -2,7 +2,8 @@
 
 Queries: :meth:`Course.patch_at`, :meth:`Course.ground_height_at`,
 :meth:`Course.foot_allowed`, :meth:`Course.obstacles_between` and the eq. (24) box of the
-next foothold, :meth:`Course.reachable_foothold_bounds` (computed in :mod:`.bounds`).
+next foothold, :meth:`Course.reachable_foothold_bounds` (computed in :mod:`.bounds`, on the
+patches with the obstacles cut out, :mod:`.landing`).
 (De)serialisation: :meth:`Course.from_dict`, :meth:`Course.to_dict` and
 :meth:`Course.from_json` (the format is in :mod:`.json_format`).
 """
@@ -12,7 +13,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,7 @@ from gaitnet_mpc.terrain.json_format import (
     course_to_dict,
     read_course_json,
 )
+from gaitnet_mpc.terrain.landing import landing_areas
 from gaitnet_mpc.terrain.patch import Obstacle, Patch, top_patch_index, top_patch_indices
 
 
@@ -71,6 +73,9 @@ class Course:
     obstacles: tuple[Obstacle, ...] = ()
     start_xy: tuple[float, float] = (0.0, 0.0)
     seed: int | None = None
+    _landing_cache: dict[float, tuple[tuple[Patch, ...], tuple[int, ...]]] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -233,11 +238,32 @@ class Course:
         margin_m: float = 0.03,
         margin_y_m: float | None = None,
         reach_back_m: float | None = None,
+        obstacle_clearance_m: float | None = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
         """Eq. (24) box for the next foothold, chosen by kinematic reach (one-step
-        preview), on this course's patches: :func:`.bounds.reachable_foothold_bounds`."""
-        return reachable_foothold_bounds(
-            self.patches,
+        preview): :func:`.bounds.reachable_foothold_bounds` on the parts of the patches
+        that no obstacle covers (:meth:`landing_areas`, footprints widened by
+        ``obstacle_clearance_m``; None: the obstacles are not known, the patches are
+        taken whole). A part cut by an obstacle is a candidate only where it holds the
+        margins (``2 margin`` long and wide), so that the foot centre can keep them from
+        the obstacle's side.
+
+        Returns:
+            ``(p_min (3,), p_max (3,), index of the patch the box lies on, or None)``.
+        """
+        margin_y = margin_m if margin_y_m is None else margin_y_m
+        if obstacle_clearance_m is None:
+            areas, parent = self.patches, tuple(range(len(self.patches)))
+        else:
+            areas, parent = self.landing_areas(obstacle_clearance_m)
+        keep = [
+            k
+            for k, a in enumerate(areas)
+            if a is self.patches[parent[k]]
+            or (a.x_max - a.x_min >= 2.0 * margin_m and a.y_max - a.y_min >= 2.0 * margin_y)
+        ]
+        lo, hi, k = reachable_foothold_bounds(
+            [areas[k] for k in keep],
             p_com_td_xy,
             foot,
             p_nominal_xy,
@@ -247,3 +273,15 @@ class Course:
             margin_y_m=margin_y_m,
             reach_back_m=reach_back_m,
         )
+        return lo, hi, (None if k is None else parent[keep[k]])
+
+    def landing_areas(
+        self, obstacle_clearance_m: float = 0.0
+    ) -> tuple[tuple[Patch, ...], tuple[int, ...]]:
+        """``(areas, parent)``: the patches with the obstacles' footprints (widened by
+        ``obstacle_clearance_m`` [m]) cut out, and the patch index of each area
+        (:func:`.landing.landing_areas`; computed once per clearance)."""
+        key = float(obstacle_clearance_m)
+        if key not in self._landing_cache:
+            self._landing_cache[key] = landing_areas(self.patches, self.obstacles, key)
+        return self._landing_cache[key]
