@@ -91,14 +91,19 @@ def test_a_strip_too_short_for_the_foot_is_no_candidate() -> None:
     assert i == 1 and lo[0] == pytest.approx(1.98)  # beyond the hole
 
 
-def test_the_view_cuts_obstacles_out_only_where_they_are_known() -> None:
+def test_the_view_keeps_touchdowns_off_obstacles_of_unknown_height() -> None:
     course = load_course("obstacle")
     kw = {"reach_x_m": 0.3, "margin_m": 0.08}
-    _, hi, _ = TerrainView(course).reachable_foothold_bounds([1.45, 0.0], "left", [1.5, 0.0], **kw)
-    assert hi[0] < 1.45
-    blind = TerrainView(course, TerrainKnowledge(obstacle_heights=False))
-    lo, hi, _ = blind.reachable_foothold_bounds([1.45, 0.0], "left", [1.5, 0.0], **kw)
-    assert lo[0] < 1.45 < hi[0]
+    for knowledge in (TerrainKnowledge(), TerrainKnowledge(obstacle_heights=False)):
+        view = TerrainView(course, knowledge)
+        _, hi, _ = view.reachable_foothold_bounds([1.45, 0.0], "left", [1.5, 0.0], **kw)
+        assert hi[0] == pytest.approx(1.45 - 0.08)
+        (box,) = view.obstacle_footprints(1.3, 1.7)  # where it stands: known either way
+        assert box.x_min == pytest.approx(1.45)
+    assert (
+        TerrainView(course, TerrainKnowledge(obstacle_heights=False)).swing_obstacles(1.3, 1.7)
+        == []
+    )  # its height: not known
 
 
 def test_seeded_obstacle_courses_in_range() -> None:
@@ -120,3 +125,17 @@ def test_seeded_obstacle_courses_in_range() -> None:
     with pytest.raises(CourseFormatError) as info:
         load_course("obstacle", seed=1, height_m=0.03)
     assert info.value.field == "obstacle.height_m"
+    with pytest.raises(CourseFormatError) as info:
+        load_course("obstacle", max_height_m=0.04)  # the built-in box: no seed, no draw
+    assert info.value.field == "obstacle.max_height_m"
+
+
+def test_a_lower_cap_keeps_the_layout_and_caps_the_heights() -> None:
+    for seed in range(20):
+        tall = load_course("obstacle", seed=seed)
+        low = load_course("obstacle", seed=seed, max_height_m=0.04)
+        assert low.patches == tall.patches, seed
+        assert [(o.x_min, o.x_max) for o in low.obstacles] == [
+            (o.x_min, o.x_max) for o in tall.obstacles
+        ]
+        assert all(0.02 - 1e-9 <= o.height_m <= 0.04 + 1e-9 for o in low.obstacles), seed

@@ -48,3 +48,20 @@ def test_knowledge_is_recorded_and_the_preview_needs_the_multi_step_view() -> No
         KDWalkController(robot, TerrainView(course), cmd, config=cfg)
     ctrl = KDWalkController(robot, walk_terrain(course, cfg), cmd, config=cfg)
     assert ctrl.terrain_knowledge()["preview"] == "multi-step"
+
+
+def test_swings_assume_a_height_where_the_obstacles_height_is_unknown() -> None:
+    from dataclasses import replace
+
+    import numpy as np
+
+    robot, course, cmd = load_robot("humanoid3d"), load_course("obstacle"), Command(0.5)
+    start, target = np.array([1.35, 0.0, 0.01]), np.array([1.65, 0.0, 0.01])
+    known_cfg = replace(preview_walk_config(), preview=None)
+    known = KDWalkController(robot, walk_terrain(course, known_cfg), cmd, config=known_cfg)
+    assert known._swing_obstacles(start, target) == [pytest.approx((1.45, 1.55, 0.03))]
+    cfg = replace(known_cfg, obstacle_heights=False, unknown_obstacle_height_m=0.05)
+    blind = KDWalkController(robot, walk_terrain(course, cfg), cmd, config=cfg)
+    assert blind.terrain_knowledge()["obstacle_heights"] is False
+    assert blind._swing_obstacles(start, target) == [pytest.approx((1.45, 1.55, 0.05))]
+    assert blind._swing_obstacles(start - 1.0, target - 1.0) == []  # none near that swing

@@ -415,21 +415,32 @@ class KDWalkController(WalkingBase):
             td = td.copy()
             td[2] -= self.config.touchdown_depth_m
             if sched.phase_in_step < self.config.retarget_until_phase:
-                self.swing.retarget(td, sched.time_in_step_s)
+                start = self.liftoff[swing]
+                self.swing.retarget(
+                    td, sched.time_in_step_s, obstacles=self._swing_obstacles(start, td)
+                )
 
     def _swing_trajectory(self, target: np.ndarray) -> SwingTrajectory:
         """Swing of the step that starts, from its lift-off point to ``target``."""
         sched = self.schedule
         start = self.liftoff[sched.swing_foot]
+        return self.config.swing.trajectory(
+            start, target, sched.current_step_duration_s, self._swing_obstacles(start, target)
+        )
+
+    def _swing_obstacles(
+        self, start: np.ndarray, target: np.ndarray
+    ) -> list[tuple[float, float, float]]:
+        """``(x_min, x_max, top_z)`` of the obstacles near the swing from ``start`` to
+        ``target``; with ``obstacle_heights`` off, each is taken as
+        ``unknown_obstacle_height_m`` high (its footprint is known, its height not)."""
         x0, x1 = sorted((start[0], target[0]))
         behind_m, ahead_m = self.config.swing_obstacle_window_m
-        obstacles = self.terrain.swing_obstacles(x0 - behind_m, x1 + ahead_m)
-        return self.config.swing.trajectory(
-            start,
-            target,
-            sched.current_step_duration_s,
-            [(o.x_min, o.x_max, o.z_top_m) for o in obstacles],
-        )
+        near = self.terrain.obstacle_footprints(x0 - behind_m, x1 + ahead_m)
+        if self.terrain.knowledge.obstacle_heights:
+            return [(o.x_min, o.x_max, o.z_top_m) for o in near]
+        h = self.config.unknown_obstacle_height_m
+        return [(o.x_min, o.x_max, o.z_base_m + h) for o in near]
 
     def _start_step(self, state: RobotState) -> None:
         sched = self.schedule

@@ -143,11 +143,16 @@ class KDWalkConfig:
     # it keeps its aim, so that a last-moment change does not jerk the foot just before it
     # lands. Set when the retargeting was written, not tuned.
     retarget_until_phase: float = bounded(0.85, "(0, 1]", "a phase", "a fraction of the step")
-    # The one-step preview holds the obstacles between lift-off and touchdown (box and
-    # height: swings clear them, touchdown boxes keep off them); False: the robot does not
-    # see them, as on the paper's hardware (Fig. 1(e)). Recorded as
-    # terrain_knowledge.obstacle_heights.
+    # The one-step preview holds the heights of the obstacles between lift-off and
+    # touchdown; False: as on the paper's hardware (Fig. 1(e), "the obstacle's height is
+    # unknown to the robot"). Where an obstacle stands is known either way (touchdown
+    # boxes keep off it). Recorded as terrain_knowledge.obstacle_heights.
     obstacle_heights: bool = True
+    # With obstacle_heights off, swings clear each obstacle as if it were this high: the
+    # stated height up to which unknown obstacles are stepped over (docs/design/obstacles.md).
+    unknown_obstacle_height_m: float = bounded(
+        0.04, "[0, 0.2] m", "a height", "0.2 m is above the humanoid's shin"
+    )
     # Obstacles the swing trajectory clears: those from this far behind the lift-off to
     # this far beyond the target, along x [m] (behind, ahead); the foot is 0.15 m long.
     swing_obstacle_window_m: tuple[float, float] = bounded(

@@ -3,9 +3,10 @@
 The paper's controller has a *one-step terrain preview* (Sec. IV-B, eq. 24): at each step
 it knows the patches the next touchdown may use, with their boxes and heights. A robot that
 perceives its next foothold also perceives what stands between its swing foot and that
-foothold, so the one-step preview here includes the boxes and heights of the obstacles
-between a swing's lift-off and its touchdown (``TerrainKnowledge.obstacle_heights``, on by
-default; off, swings get no obstacle clearance). The multi-step footstep preview of
+foothold, so the one-step preview here includes where the obstacles between a swing's
+lift-off and its touchdown stand, and their heights (``TerrainKnowledge.obstacle_heights``,
+on by default; off, as in the paper's Fig. 1(e) hardware run, the heights are not known
+and the controller assumes one). The multi-step footstep preview of
 ``kd --preview`` (beyond the paper) may in addition read every patch of the course ahead
 (:meth:`TerrainView.course_for_multi_step_preview`).
 
@@ -34,8 +35,9 @@ class TerrainKnowledge:
     Attributes:
         multi_step: the multi-step footstep preview (``--preview``) may read the patches of
             the course ahead (beyond the paper); False: the paper's one-step preview.
-        obstacle_heights: swing trajectories know the obstacles (box and height) between
-            lift-off and touchdown.
+        obstacle_heights: swing trajectories know the heights of the obstacles between
+            lift-off and touchdown; where an obstacle stands (its footprint) is known
+            either way.
     """
 
     multi_step: bool = False
@@ -80,10 +82,9 @@ class TerrainView:
     ) -> tuple[np.ndarray, np.ndarray, int | None]:
         """Eq. 24 box of the next touchdown: :meth:`Course.reachable_foothold_bounds`.
 
-        Where the obstacles are known (``knowledge.obstacle_heights``), the box lies off
-        them, their footprints widened by ``obstacle_clearance_m``; otherwise the patches
-        are taken as they are."""
-        known = self.knowledge.obstacle_heights
+        The box lies off the obstacles' footprints, widened by ``obstacle_clearance_m``:
+        the preview sees where an obstacle stands even where its height is not known (the
+        paper's Fig. 1(e) hardware run: "the obstacle's height is unknown to the robot")."""
         return self._course.reachable_foothold_bounds(
             p_com_touchdown_xy,
             foot,
@@ -92,7 +93,7 @@ class TerrainView:
             margin_m=margin_m,
             margin_y_m=margin_y_m,
             reach_back_m=reach_back_m,
-            obstacle_clearance_m=obstacle_clearance_m if known else None,
+            obstacle_clearance_m=obstacle_clearance_m,
         )
 
     def swing_obstacles(self, x0_m: float, x1_m: float) -> list[Obstacle]:
@@ -100,6 +101,12 @@ class TerrainView:
         order), or none where ``obstacle_heights`` is off."""
         if not self.knowledge.obstacle_heights:
             return []
+        return self.obstacle_footprints(x0_m, x1_m)
+
+    def obstacle_footprints(self, x0_m: float, x1_m: float) -> list[Obstacle]:
+        """The obstacles between ``x0_m`` and ``x1_m`` (either order) whatever
+        ``obstacle_heights`` says: where they stand is part of the preview, their height
+        only with ``obstacle_heights`` (read ``height_m`` only then)."""
         return self._course.obstacles_between(min(x0_m, x1_m), max(x0_m, x1_m))
 
     # ------------------------------------------------------------- beyond the paper

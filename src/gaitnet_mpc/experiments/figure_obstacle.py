@@ -7,7 +7,8 @@
 cases of :data:`CASES`: at 0.5 m/s (the paper's) and 0.75 m/s, with the obstacle's box
 and height known to the controller (``terrain_knowledge.obstacle_heights``, the default
 one-step preview) and unknown (as on the paper's hardware). Then (not in a quick run)
-the seeded ``obstacle`` courses :data:`SEEDS` at 0.75 m/s, heights known. The run files
+the seeded ``obstacle`` courses :data:`SEEDS` at 0.75 m/s, heights known, and the same
+layouts with boxes up to :data:`UNKNOWN_MAX_HEIGHT_M` with heights unknown. The run files
 hold no foot position per tick, so :class:`FootRecorder` (the ``on_step`` hook) reads
 ``sim.data``: per foot, the lowest point of its box (points along its four long edges,
 :data:`SOLE_SAMPLES` each) overall and inside an obstacle's x range, and every contact
@@ -25,6 +26,7 @@ contact with the terrain is a fall); feet that touched an obstacle are counted b
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -53,12 +55,13 @@ from gaitnet_mpc.experiments.figure_common import (
     word,
     write_csv,
 )
+from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.results.plots import FOOT_COLORS, OBSTACLE_COLOR, PATCH_COLORS, new_figure
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.episode import VideoConfig
 from gaitnet_mpc.scenario import build_episode, make_scenario
 from gaitnet_mpc.sim.simulator import Simulator
-from gaitnet_mpc.terrain import Course, Obstacle
+from gaitnet_mpc.terrain import Course, Obstacle, load_course
 
 #: Points along each long edge of a foot's box where its height is taken.
 SOLE_SAMPLES = 31
@@ -66,6 +69,9 @@ SOLE_SAMPLES = 31
 SEEDS = tuple(range(20))
 #: Speed of the seeded runs [m/s] (the paper's walking speed).
 VX_SEEDED_MPS = 0.75
+#: Tallest box of the seeded layouts run with the obstacle unknown [m]: the height the
+#: swings assume then (``KDWalkConfig.unknown_obstacle_height_m``).
+UNKNOWN_MAX_HEIGHT_M = 0.04
 
 
 @dataclass(frozen=True)
@@ -391,7 +397,8 @@ def build_obstacle(
     ]
     claims.append(f"- Rule: {rule}." + (" The hole is not judged in a quick run." if quick else ""))
     if not quick:
-        table += ["", *_seeded(out, duration_s, log, results)]
+        for known in (True, False):
+            table += ["", *_seeded(out, duration_s, log, known)]
     notes = [
         "Clearance: per pass of a foot over the obstacle's x range, the least height above "
         f"the obstacle's top of a point of the foot (its box's long edges, {SOLE_SAMPLES} "
@@ -399,10 +406,14 @@ def build_obstacle(
         "hook (the run files hold no foot position per tick); at most 0: the foot hit the "
         "obstacle. Heights in the figure (the first case): the foot's lowest point, over "
         "its centre's x.",
-        "Obstacle known: the one-step preview holds the obstacle's box and height "
-        "(`terrain_knowledge.obstacle_heights` = true, the default): the swing clears it and "
-        "the touchdown boxes keep off it (docs/design/obstacles.md). Unknown "
-        "(`--set obstacle_heights=false`): as on the paper's hardware.",
+        "Obstacle known: the one-step preview holds the obstacle's footprint and height "
+        "(`terrain_knowledge.obstacle_heights` = true, the default): the swing clears its "
+        "top and the touchdown boxes keep off its footprint (docs/design/obstacles.md). "
+        "Unknown (`--set obstacle_heights=false`), as on the paper's hardware (\"the "
+        "obstacle's height is unknown to the robot\"): the footprint is known, and the "
+        "swing clears the obstacle as if it were `unknown_obstacle_height_m` (4 cm) high.",
+        "Seeded courses: *clean* counts falls and foothold violations; a foot that touched "
+        "a box (a negative clearance) is in its own column.",
     ]
     setup = (
         f"`{ROBOT}`, `gaitnet` (default settings), built-in `obstacle` course (a "
@@ -413,13 +424,17 @@ def build_obstacle(
     return Report("Fig. 1(e): over an obstacle and a gap", setup, table, claims, notes, runs)
 
 
-def _seeded(out: Path, duration_s: float, log: Log, results: list[CaseResult]) -> list[str]:
-    """Seeded ``obstacle`` courses :data:`SEEDS` at :data:`VX_SEEDED_MPS`, heights known:
-    the table's lines."""
+def _seeded(out: Path, duration_s: float, log: Log, known: bool) -> list[str]:
+    """Seeded ``obstacle`` courses :data:`SEEDS` at :data:`VX_SEEDED_MPS`: the table's
+    lines. Obstacle unknown: the same layouts with boxes up to
+    :data:`UNKNOWN_MAX_HEIGHT_M` (each written to ``courses/`` and run from its file)."""
+    if known:
+        what = "obstacle known (1-3 boxes 2-6 cm high"
+    else:
+        what = f"obstacle unknown (1-3 boxes 2-{100 * UNKNOWN_MAX_HEIGHT_M:g} cm high"
     lines = [
-        f"Seeded `obstacle` courses {SEEDS[0]}-{SEEDS[-1]} at {VX_SEEDED_MPS:g} m/s, obstacle "
-        "known (1-3 boxes 2-6 cm high, 5-15 cm long, each followed within 0.45 m by a "
-        "10-20 cm hole):",
+        f"Seeded `obstacle` courses {SEEDS[0]}-{SEEDS[-1]} at {VX_SEEDED_MPS:g} m/s, {what}, "
+        "5-15 cm long, each followed within 0.45 m by a 10-20 cm hole):",
         "",
         "| seed | boxes: x [m], height [cm] | outcome | foothold violations | feet touched a box "
         "[ticks] | least clearance | touchdowns over a box | clean |",
@@ -427,8 +442,16 @@ def _seeded(out: Path, duration_s: float, log: Log, results: list[CaseResult]) -
     ]
     clean = 0
     for seed in SEEDS:
-        scenario = _scenario("obstacle", VX_SEEDED_MPS, duration_s, True, seed)
-        res, episode = _run(out, f"gaitnet-obstacle-seed{seed}", scenario, None, log)
+        course: str = "obstacle"
+        if not known:
+            layout = load_course("obstacle", seed=seed, max_height_m=UNKNOWN_MAX_HEIGHT_M)
+            path = out / "courses" / f"obstacle-seed{seed}-max{100 * UNKNOWN_MAX_HEIGHT_M:g}cm.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_atomic(path, json.dumps(layout.to_dict(), indent=1) + "\n")
+            course = str(path)
+        scenario = _scenario(course, VX_SEEDED_MPS, duration_s, known, seed if known else None)
+        folder = f"gaitnet-obstacle-seed{seed}" + ("" if known else "-unknown")
+        res, episode = _run(out, folder, scenario, None, log)
         ok = not fell(res.run) and res.violations == 0
         clean += ok
         boxes = ", ".join(

@@ -97,7 +97,9 @@ FIGURES: dict[str, str] = {
     "obstacle": "over a 3 cm obstacle and a 15 cm hole at 0.5 and 0.75 m/s, obstacle known "
     "and unknown, then 20 seeded obstacle courses: swing-foot clearance (Fig. 1(e))",
 }
-_EXTRA = {"fig7": ("fig7_strip.png",), "fig10": ("fig10_loads.jsonl",)}
+_EXTRA = {
+    "fig7": ("fig7_strip.png",), "fig10": ("fig10_loads.jsonl",), "obstacle": ("courses",),
+}  # fmt: skip
 #: What each figure writes into its folder (what an ``--overwrite`` may replace).
 ARTIFACTS: dict[str, tuple[str, ...]] = {
     name: (f"{name}.md", f"{name}.csv", f"{name}.png", f"{name}.svg", "runs", *_EXTRA.get(name, ()))

@@ -306,6 +306,7 @@ def obstacle_course(
     gap_x_m: float | None = None,
     gap_width_m: float | None = None,
     seed: int | None = None,
+    max_height_m: float | None = None,
 ) -> Course:
     """``obstacle``: boxes across the walkway, each followed by a hole (the paper's
     Fig. 1(e)), then ground to x = 25 m.
@@ -317,9 +318,11 @@ def obstacle_course(
     millimetres: a box 0.05-0.15 m long and 0.02-0.06 m high (the first starts uniformly
     in [1.0, 1.5] m), 0.25-0.45 m of ground, a hole 0.10-0.20 m wide, then 0.5-0.9 m of
     ground before the next box; all uniform, so the last hole ends before x = 5.7 m
-    (8 s at 0.75 m/s).
-    Parameters together with a seed are refused (the seed draws them). The course
-    records ``seed``.
+    (8 s at 0.75 m/s). The heights come from a generator of their own
+    (``default_rng([seed, 1])``), uniform in [0.02, ``max_height_m``] m (default 0.06),
+    so another ``max_height_m`` gives the same layout with other heights. Other parameters
+    together with a seed are refused (the seed draws them), as is ``max_height_m``
+    without one. The course records ``seed``.
     """
     seed = layout_seed(seed, "obstacle.seed")
     if seed is not None:
@@ -330,19 +333,30 @@ def obstacle_course(
                 raise CourseFormatError(
                     f"obstacle.{name}", value, "no value together with a seed (the seed draws it)"
                 )
+        top_mm = _RO_HEIGHT_MM[1]
+        if max_height_m is not None:
+            top_m = _RO_HEIGHT_MM[0] / 1000.0
+            v = _param(max_height_m, "obstacle.max_height_m", top_m - 1e-9, 0.5,
+                       f"a height in [{top_m:g}, 0.5) m")  # fmt: skip
+            top_mm = round(1000 * v)
         rng = np.random.default_rng(seed)
+        heights = np.random.default_rng([seed, 1])
         boxes_mm: list[tuple[int, int, int]] = []
         holes_mm: list[tuple[int, int]] = []
         x0 = _draw_mm(rng, _RO_X0_MM)
         for _ in range(_draw_mm(rng, _RO_COUNT)):
             x1 = x0 + _draw_mm(rng, _RO_LENGTH_MM)
-            boxes_mm.append((x0, x1, _draw_mm(rng, _RO_HEIGHT_MM)))
+            boxes_mm.append((x0, x1, _draw_mm(heights, (_RO_HEIGHT_MM[0], top_mm))))
             h0 = x1 + _draw_mm(rng, _RO_TO_HOLE_MM)
             holes_mm.append((h0, h0 + _draw_mm(rng, _RO_HOLE_MM)))
             x0 = holes_mm[-1][1] + _draw_mm(rng, _RO_GROUND_MM)
         boxes = [(a / 1000.0, b / 1000.0, h / 1000.0) for a, b, h in boxes_mm]
         holes = [(a / 1000.0, b / 1000.0) for a, b in holes_mm]
     else:
+        if max_height_m is not None:
+            raise CourseFormatError(
+                "obstacle.max_height_m", max_height_m, "no value without a seed (one box)"
+            )
         height_m = _param(
             0.03 if height_m is None else height_m, "obstacle.height_m", 0.0, 0.5,
             "a height in (0, 0.5) m",
