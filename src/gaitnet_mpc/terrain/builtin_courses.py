@@ -58,6 +58,10 @@ _RG_WIDTH_MM = (50, 200)
 _RG_GROUND_MM = (600, 1200)
 
 
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else value
+
+
 def _draw_mm(rng: np.random.Generator, bounds_mm: tuple[int, int]) -> int:
     """An integer uniform in the closed range ``bounds_mm`` (millimetres, or a count)."""
     return int(rng.integers(bounds_mm[0], bounds_mm[1] + 1))
@@ -330,9 +334,7 @@ def obstacle_course(
                  ("gap_width_m", gap_width_m))  # fmt: skip
         for name, value in given:
             if value is not None:
-                raise CourseFormatError(
-                    f"obstacle.{name}", value, "no value together with a seed (the seed draws it)"
-                )
+                raise CourseFormatError(f"obstacle.{name}", value, "no value with a seed")
         top_mm = _RO_HEIGHT_MM[1]
         if max_height_m is not None:
             top_m = _RO_HEIGHT_MM[0] / 1000.0
@@ -357,22 +359,10 @@ def obstacle_course(
             raise CourseFormatError(
                 "obstacle.max_height_m", max_height_m, "no value without a seed (one box)"
             )
-        height_m = _param(
-            0.03 if height_m is None else height_m, "obstacle.height_m", 0.0, 0.5,
-            "a height in (0, 0.5) m",
-        )  # fmt: skip
-        x_m = _param(
-            1.5 if x_m is None else x_m, "obstacle.x_m", 0.1, 15.0,
-            "an obstacle position in (0.1, 15) m",
-        )  # fmt: skip
-        gap_x_m = _param(
-            2.2 if gap_x_m is None else gap_x_m, "obstacle.gap_x_m", x_m + 0.05, 15.0,
-            f"a gap start > {x_m + 0.05}",
-        )  # fmt: skip
-        gap_width_m = _param(
-            0.15 if gap_width_m is None else gap_width_m, "obstacle.gap_width_m", 0.0, 5.0,
-            "a width in (0, 5) m",
-        )  # fmt: skip
+        height_m = _param(_or(height_m, 0.03), "obstacle.height_m", 0.0, 0.5, "in (0, 0.5) m")
+        x_m = _param(_or(x_m, 1.5), "obstacle.x_m", 0.1, 15.0, "in (0.1, 15) m")
+        gap_x_m = _param(_or(gap_x_m, 2.2), "obstacle.gap_x_m", x_m + 0.05, 15.0, f"> {x_m + 0.05}")
+        gap_width_m = _param(_or(gap_width_m, 0.15), "obstacle.gap_width_m", 0.0, 5.0, "in (0, 5)")
         boxes = [(x_m - 0.05, x_m + 0.05, height_m)]
         holes = [(gap_x_m, gap_x_m + gap_width_m)]
     edges = [_COURSE_X_START_M, *(x for hole in holes for x in hole), _COURSE_X_END_M]
