@@ -59,7 +59,7 @@ from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.results.plots import FOOT_COLORS, OBSTACLE_COLOR, PATCH_COLORS, new_figure
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.episode import VideoConfig
-from gaitnet_mpc.scenario import build_episode, make_scenario
+from gaitnet_mpc.scenario import Episode, Scenario, build_episode, make_scenario
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import Course, Obstacle, load_course
 
@@ -99,7 +99,9 @@ CASES = (
 )
 
 
-def _scenario(course: str, vx_mps: float, duration_s: float, known: bool, seed: int | None):
+def _scenario(
+    course: str, vx_mps: float, duration_s: float, known: bool, seed: int | None
+) -> Scenario:
     overrides = [] if known else ["obstacle_heights=false"]
     return make_scenario(
         robot=ROBOT, controller="gaitnet", course=course, vx_mps=vx_mps,
@@ -194,7 +196,7 @@ class FootRecorder:
         return sorted(out, key=lambda p: p["t0_s"])
 
 
-def _recorder(episode: Any) -> FootRecorder:
+def _recorder(episode: Episode) -> FootRecorder:
     course, sim = episode.course, episode.sim
     ids = [sim.model.geom(f"obstacle_{i}").id for i in range(len(course.obstacles))]
     return FootRecorder(sim, course.obstacles, ids)
@@ -246,8 +248,8 @@ class CaseResult:
 
 
 def _run(
-    out: Path, folder: str, scenario: Any, video: VideoConfig | None, log: Log
-) -> tuple[CaseResult, Any]:
+    out: Path, folder: str, scenario: Scenario, video: VideoConfig | None, log: Log
+) -> tuple[CaseResult, Episode]:
     episode = build_episode(scenario)
     rec = _recorder(episode)
     run = run_in_folder(scenario, out / "runs" / folder, video, log, episode, rec)
@@ -269,7 +271,8 @@ def _run(
     return result, episode
 
 
-def _figure(out: Path, course: Course, rec: FootRecorder, run: RunFolder, r_foot: float) -> None:
+def _figure(out: Path, course: Course, res: CaseResult, r_foot: float) -> None:
+    rec, run = res.recorder, res.run
     box = course.obstacles[0]
     h0, h1 = holes(course)[0]
     holds = holds_of(run)
@@ -295,7 +298,7 @@ def _figure(out: Path, course: Course, rec: FootRecorder, run: RunFolder, r_foot
                xlabel="x of the foot centre [m]", ylabel="height [m]")  # fmt: skip
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper right", fontsize=7, ncols=3)
-    passes = rec.passes(1e-3)
+    passes = res.passes
     axes[1].set_title(
         "over the obstacle (the foot is 15 cm long): least clearance per pass "
         + ", ".join(f"{p['foot']} {cm_text(p['clearance_m'])}" for p in passes),
@@ -331,7 +334,7 @@ def build_obstacle(
         ]  # fmt: skip
         if first is None:
             first = episode
-            _figure(out, episode.course, res.recorder, res.run, r_foot)
+            _figure(out, episode.course, res, r_foot)
     assert first is not None
     write_csv(out, "obstacle", rows)
     course, spec = first.course, first.robot.spec
