@@ -31,7 +31,8 @@ The objective and the feasible set are those of the sparse QP restricted to the
 eliminated variables' values, so the minimiser is the same (checked against PIQP on
 recorded problems in ``tests/test_kd_condensed.py``). ``M`` comes from a forward
 substitution over the stages with ``n_u + 1`` right-hand sides; products with the input
-rows of ``M`` (copies of ``u``) are gathers and sums, not matrix products.
+rows of ``M`` (copies of ``u``) are scatter-adds of the sparse QP's stored entries into
+their ``u`` columns (``np.bincount``, maps made once per structure), not matrix products.
 
 The remaining products (``M_S^T P_S M_S``: 66 x 150 x 66) are small enough that
 OpenBLAS's threads cost more than they save: on this 2-core machine, loaded by another
@@ -110,7 +111,8 @@ class _Structure:
     """What the eliminations of one contact schedule and one set of fixed axes keep.
 
     ``M_I`` (the input rows of ``M``) is a 0/1 matrix: each free input is a copy of one
-    ``u``. Products with it are gathers and sums, over the free inputs sorted by ``u``.
+    ``u``. Products with it are sums over each ``u``'s copies (scatter-adds of a sparse
+    matrix's entries, or gathers of a vector over the free inputs sorted by ``u``).
 
     Attributes:
         free: (n_I,) bool, inputs (``I`` columns) that are a free variable or a copy of
@@ -122,8 +124,12 @@ class _Structure:
         u_source: (n_u,) input position whose box bounds ``u``;
         rows: kept inequality rows (stance wrench rows, separation rows);
         n_u: number of condensed variables;
-        a_take, a_put: the entries of ``A.data`` in kept rows and input columns, and their
-            flat positions in the dense (kept rows, n_I) block.
+        eq_take, eq_put: the entries of ``A_eq.data`` in free input columns, and their flat
+            positions in the (m_eq, n_u + 1) right-hand side ``A_I M_I`` (column ``u``);
+        a_take, a_put: the same for ``A.data`` in kept rows, into (kept rows, n_u);
+        a_m_take, a_m_row, a_m_input: the entries of ``A.data`` in kept rows and any input
+            column, their kept row and their input position (for ``A m``);
+        p_input_u: (n_u,) ``sum P_I`` over each ``u``'s copies (``M_I^T P_I M_I``, diagonal).
     """
 
     free: np.ndarray
@@ -134,12 +140,18 @@ class _Structure:
     u_source: np.ndarray
     rows: np.ndarray
     n_u: int
+    eq_take: np.ndarray
+    eq_put: np.ndarray
     a_take: np.ndarray
     a_put: np.ndarray
+    a_m_take: np.ndarray
+    a_m_row: np.ndarray
+    a_m_input: np.ndarray
+    p_input_u: np.ndarray
 
-    def times_m_input(self, a: np.ndarray) -> np.ndarray:
-        """``a @ M_I`` for ``a`` (r, n_I)."""
-        return np.add.reduceat(a[:, self.by_u], self.u_start, axis=1)
+    def sum_by_u(self, values: np.ndarray) -> np.ndarray:
+        """``M_I^T values`` (n_u,) for ``values`` (n_I,): each ``u``'s copies summed."""
+        return np.add.reduceat(values[self.by_u], self.u_start)
 
 
 @dataclass(frozen=True)
@@ -220,22 +232,34 @@ class KDCondensed:
         self._input_pos[self.cols_i] = np.arange(self.n_i)
         self._a_pattern = _Pattern.empty()  # of the sparse QP's A_eq and A, on first use
         self._eq_pattern = _Pattern.empty()
+        self._p_matrix: Any = None  # the sparse QP's P (diagonal) and its diagonal
+        self._p_diag = np.zeros(0)
         # BLAS on one thread during a solve (module docstring): its products are small
         self._blas = ThreadpoolController()
 
     def _patterns(self, problem: QPProblem) -> None:
-        """Read the (fixed) sparsity patterns of ``A_eq`` and ``A`` on the first call; the
-        scatter maps of the dense blocks depend on them."""
+        """Read the sparsity patterns of ``A_eq`` and ``A`` and the diagonal of ``P`` on the
+        first call, and again whenever they change (never, for the problems of one
+        :class:`KDSubproblem`: it lays its patterns out once and keeps one ``P``); the
+        scatter maps of the condensing depend on them."""
         assert problem.A_eq is not None and problem.A is not None
-        if self._eq_pattern.matches(problem.A_eq) and self._a_pattern.matches(problem.A):
+        same = (
+            problem.P is self._p_matrix
+            and self._eq_pattern.matches(problem.A_eq)
+            and self._a_pattern.matches(problem.A)
+        )
+        if same:
             return
         self._cache.clear()
+        self._p_matrix = problem.P
+        self._p_diag = problem.P.diagonal()
         self._a_pattern = _Pattern.of(problem.A)
         eq = self._eq_pattern = _Pattern.of(problem.A_eq)
         # A_I (m_eq, n_I): every entry in an input column
         c = self._input_pos[eq.cols]
         self._eq_i_take = np.flatnonzero(c >= 0)
-        self._eq_i_put = eq.rows[self._eq_i_take] * self.n_i + c[self._eq_i_take]
+        self._eq_i_row = eq.rows[self._eq_i_take]
+        self._eq_i_input = c[self._eq_i_take]
         # sub-diagonal blocks (h, NS, NS): rows of stage k + 1 on the states of stage k
         state_pos = np.full(self.layout.n, -1)
         state_pos[self.cols_s] = np.arange(self.cols_s.size)
@@ -283,10 +307,21 @@ class KDCondensed:
         row_pos = np.full(self._a_pattern.shape[0], -1)
         row_pos[rows] = np.arange(rows.size)
         r, c = row_pos[self._a_pattern.rows], self._input_pos[self._a_pattern.cols]
-        take = np.flatnonzero((r >= 0) & (c >= 0))
+        take = np.flatnonzero((r >= 0) & (c >= 0))  # A: kept rows, input columns
+        u_a = u_of_input[c[take]]
+        a_u = u_a >= 0  # ... and free inputs
+        u_eq = u_of_input[self._eq_i_input]
+        eq_u = u_eq >= 0
         found = _Structure(
             free, base, by_u, u_start, u_of_input, np.flatnonzero(owner), rows, n_u,
-            take, r[take] * self.n_i + c[take],
+            eq_take=self._eq_i_take[eq_u],
+            eq_put=self._eq_i_row[eq_u] * (n_u + 1) + u_eq[eq_u],
+            a_take=take[a_u],
+            a_put=r[take[a_u]] * n_u + u_a[a_u],
+            a_m_take=take,
+            a_m_row=r[take],
+            a_m_input=c[take],
+            p_input_u=np.add.reduceat(self._p_diag[self.cols_i][by_u], u_start),
         )  # fmt: skip
         if len(self._cache) >= _CACHE_SIZE:
             self._cache.pop(next(iter(self._cache)))
@@ -327,33 +362,43 @@ class KDCondensed:
         m_pf = pf[base_pf] - pf  # ties: p^j_k0 - p^j_k
         m_i[self._n_w :] = np.where(fixed_pf[base_pf], m_pf + lb_i[self._n_w :][base_pf], m_pf)
         # states: A_S z_S = b - A_I z_I, A_S block lower bidiagonal with identity diagonal
-        # blocks (stage k + 1's rows read stage k's states only)
+        # blocks (stage k + 1's rows read stage k's states only). The right-hand sides
+        # -A_I M_I (one column per u) and b - A_I m_I are scatter-adds of A_I's entries.
         m_eq, h = problem.b_eq.size, self.layout.horizon
         eq_data = problem.A_eq.data
-        a_i = _dense((m_eq, self.n_i), self._eq_i_put, eq_data[self._eq_i_take])
+        rhs = np.bincount(
+            st.eq_put, weights=-eq_data[st.eq_take], minlength=m_eq * (n_u + 1)
+        ).reshape(m_eq, n_u + 1)
+        a_i_m = np.bincount(
+            self._eq_i_row,
+            weights=eq_data[self._eq_i_take] * m_i[self._eq_i_input],
+            minlength=m_eq,
+        )
+        rhs[:, -1] = problem.b_eq - a_i_m
         lower = _dense((h, _NS, _NS), self._eq_l_put, eq_data[self._eq_l_take])
-        rhs = np.empty((m_eq, n_u + 1))
-        rhs[:, :-1] = -st.times_m_input(a_i)
-        rhs[:, -1] = problem.b_eq - a_i @ m_i
         sol = rhs  # forward substitution in place, stage by stage
         b = _NS
         for k in range(h):
             sol[b * (k + 1) : b * (k + 2)] -= lower[k] @ sol[b * k : b * (k + 1)]
         m_s, m_mat_s = sol[:, -1], sol[:, :-1]
         # cost: M^T P M = M_I^T P_I M_I (diagonal) + M_S^T P_S M_S; states 0 are fixed
-        p_diag = problem.P.diagonal()
-        p_i, p_s = p_diag[cols_i], p_diag[cols_s]
+        p_i, p_s = self._p_diag[cols_i], self._p_diag[cols_s]
         w_s = np.sqrt(p_s[b:])[:, None] * m_mat_s[b:]
         hess = w_s.T @ w_s
-        hess[np.diag_indices(n_u)] += np.add.reduceat(p_i[st.by_u], st.u_start)
+        hess.flat[:: n_u + 1] += st.p_input_u
         g_i = p_i * m_i + problem.q[cols_i]
         g_s = p_s * m_s + problem.q[cols_s]
-        grad = np.add.reduceat(g_i[st.by_u], st.u_start) + m_mat_s.T @ g_s
+        grad = st.sum_by_u(g_i) + m_mat_s.T @ g_s
         # rows: kept inequality rows (inputs only), then finite boxes on states
-        a_in = _dense((st.rows.size, self.n_i), st.a_put, problem.A.data[st.a_take])
+        a_data = problem.A.data
+        n_rows = st.rows.size
+        g_in = np.bincount(st.a_put, weights=a_data[st.a_take], minlength=n_rows * n_u)
+        g_in = g_in.reshape(n_rows, n_u)
+        shift = np.bincount(
+            st.a_m_row, weights=a_data[st.a_m_take] * m_i[st.a_m_input], minlength=n_rows
+        )
         l_in, u_in = problem.ineq_bounds()
-        shift = a_in @ m_i
-        g_rows = [st.times_m_input(a_in)]
+        g_rows = [g_in]
         lo = [l_in[st.rows] - shift]
         hi = [u_in[st.rows] - shift]
         lb_s, ub_s = lb[cols_s], ub[cols_s]
@@ -368,7 +413,7 @@ class KDCondensed:
         qp = {
             "H": np.ascontiguousarray(hess),
             "f": np.ascontiguousarray(grad),
-            "A": np.ascontiguousarray(np.vstack(g_rows)),
+            "A": g_in if len(g_rows) == 1 else np.vstack(g_rows),
             "bupper": hi_all,
             "blower": lo_all,
             "sense": sense,
