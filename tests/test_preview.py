@@ -154,3 +154,24 @@ def test_bad_arguments_name_the_field(override: dict, field: str) -> None:
 def test_bad_config_names_the_field(kwargs: dict, field: str) -> None:
     with pytest.raises(ConfigError, match=field):
         PreviewConfig(**kwargs)
+
+
+def test_plan_keeps_footholds_off_an_obstacle_with_the_landing_areas() -> None:
+    """On the built-in obstacle course (a box at x 1.45-1.55 m across the walkway) the plan
+    made on the landing areas puts no foot centre within the box's footprint widened by
+    the clearance and the x margin; on the whole patches the same plan does."""
+    course = load_course("obstacle")
+    box = course.obstacles[0]
+    keep_off = 0.02 + MARGINS_M[0] - 1e-6  # the plan may sit on the widened box's edge
+
+    def over_box(plan) -> bool:
+        x = plan.foothold_m[1:, 0]
+        return bool(np.any((x > box.x_min - keep_off) & (x < box.x_max + keep_off)))
+
+    args = _steady(1.2, 0.045, v=0.5)
+    whole = plan_preview(course, PreviewConfig(n_steps=6), **args)
+    cut = plan_preview(course, PreviewConfig(n_steps=6), **args, obstacle_clearance_m=0.02)
+    assert whole is not None and cut is not None
+    assert over_box(whole)
+    assert not over_box(cut)
+    assert cut.foothold_m[-1, 0] > box.x_max  # it still walks past the box

@@ -141,6 +141,13 @@ class Controller(ABC):
         controller has none."""
         return None
 
+    @property
+    def swing_events(self) -> list[dict[str, Any]]:
+        """Each time the controller raised an obstacle's assumed top for its swings
+        (``summary.json``'s ``swing_events``: ``kind`` "toe_strike" or "shank", time,
+        foot, the obstacle tops then assumed); empty for controllers that do not."""
+        return []
+
     def telemetry(self) -> Telemetry | None:
         """This tick's telemetry, after :meth:`compute`; None for controllers without a
         gait (e.g. ``stand``)."""

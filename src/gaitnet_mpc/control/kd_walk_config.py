@@ -153,6 +153,18 @@ class KDWalkConfig:
     unknown_obstacle_height_m: float = bounded(
         0.04, "[0, 0.2] m", "a height", "0.2 m is above the humanoid's shin"
     )
+    # Toe strike (the swing foot's contact sensor turns on while the foot is over or
+    # against a known obstacle footprint): the obstacle is taken as this much higher than
+    # the foot stands then, or than it was taken before, whichever is higher, and the rest
+    # of the swing lifts the foot over that top to the same foothold. 0: off.
+    # One strike on a 10 cm box taken as 4 cm high then clears it (docs/design/obstacles.md).
+    toe_strike_raise_m: float = bounded(
+        0.04, "[0, 0.2] m", "a height", "0.2 m is above the humanoid's shin"
+    )
+    # Least height of the swing leg's shank capsule above an obstacle along the planned
+    # swing; a plan that passes lower is recorded (KDWalkController._check_shank). The
+    # foot's own margin is swing.clearance_m.
+    shank_clearance_m: float = bounded(0.01, "[0, 0.1] m", "a margin", "0.1 m is a shin")
     # Obstacles the swing trajectory clears: those from this far behind the lift-off to
     # this far beyond the target, along x [m] (behind, ahead); the foot is 0.15 m long.
     swing_obstacle_window_m: tuple[float, float] = bounded(

@@ -46,7 +46,7 @@ from gaitnet_mpc.config import bounded, check_ranges, weight
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.robots.spec import FEET
-from gaitnet_mpc.terrain import Course
+from gaitnet_mpc.terrain import Course, Patch
 
 __all__ = ["PreviewConfig", "PreviewPlan", "plan_preview"]
 
@@ -114,7 +114,7 @@ class PreviewPlan:
 
     feet: tuple[str, ...]  # stance foot of step i (step 0: the current stance)
     foothold_m: np.ndarray  # (n+1, 2) p_i in x, y (step 0: the measured stance foot)
-    patch: tuple[int, ...]  # course patch index of each p_i (step 0: -1, given)
+    patch: tuple[int, ...]  # index of each p_i's area in plan_areas (step 0: -1, given)
     times_s: np.ndarray  # (S+1,) stage boundaries from now
     com_m: np.ndarray  # (S+1, 2) CoM x, y
     com_v_mps: np.ndarray  # (S+1, 2)
@@ -195,6 +195,25 @@ class _Program:
         return None if res.x is None else res.x
 
 
+def plan_areas(
+    course: Course, obstacle_clearance_m: float | None, margin_m: tuple[float, float]
+) -> tuple[Patch, ...]:
+    """The areas a preview plans footholds on: the course's patches (None), or its landing
+    areas with the obstacles' footprints widened by ``obstacle_clearance_m`` cut out
+    (:meth:`Course.landing_areas`), a cut part only where it holds the (x, y) margins
+    ``margin_m`` on both sides (as the one-step preview's
+    :meth:`Course.reachable_foothold_bounds`)."""
+    if obstacle_clearance_m is None:
+        return course.patches
+    areas, parent = course.landing_areas(obstacle_clearance_m)
+    return tuple(
+        a
+        for a, j in zip(areas, parent, strict=True)
+        if a is course.patches[j]
+        or (a.x_max - a.x_min >= 2 * margin_m[0] and a.y_max - a.y_min >= 2 * margin_m[1])
+    )
+
+
 def plan_preview(
     course: Course,
     config: PreviewConfig,
@@ -211,6 +230,7 @@ def plan_preview(
     y_path_m: float,
     margin_m: tuple[float, float],
     first_patch: int | None = None,
+    obstacle_clearance_m: float | None = None,
 ) -> PreviewPlan | None:
     """Solve the preview MILP (module docstring) from the measured CoM state.
 
@@ -225,7 +245,11 @@ def plan_preview(
         v_cmd_mps: commanded forward speed [m/s].
         y_path_m: lateral position of the commanded path [m] (the CoM sways about it).
         margin_m: (x, y) distance of the foot centre from a patch's edges [m].
-        first_patch: course patch index the next touchdown must use (None: free).
+        first_patch: index (in :func:`plan_areas`) of the area the next touchdown must
+            use (None: free).
+        obstacle_clearance_m: plan on the landing areas, the patches with the obstacles'
+            footprints widened by this much cut out (:func:`plan_areas`); None: on the
+            whole patches.
 
     Returns:
         The plan, or ``None`` when the program has no solution (e.g. the CoM is already
@@ -251,9 +275,10 @@ def plan_preview(
     feet = tuple(stance_foot if i % 2 == 0 else other for i in range(n + 1))
     x0, y0 = float(com_m[0]), float(com_m[1])
     x_far = x0 + (n + 1) * c.max_advance_m + 0.5  # patches the plan may reach
+    areas = plan_areas(course, obstacle_clearance_m, margin_m)
     near = [
         j
-        for j, p in enumerate(course.patches)
+        for j, p in enumerate(areas)
         if p.x_max - margin_m[0] > x0 - 0.5
         and p.x_min + margin_m[0] < x_far
         and p.x_max - p.x_min > 2 * margin_m[0]
@@ -316,7 +341,7 @@ def plan_preview(
         side = 1.0 if feet[i] == "left" else -1.0  # foot i beside foot i-1 on its own side
         prog.soft_row([(py[i], side), (py[i - 1], -side)], c.min_width_m, c.max_width_m, c.w_soft)
         prog.abs_of([(py[i], side), (py[i - 1], -side)], c.width_m, c.w_width)
-        choice = [j for j in near if course.patches[j].allows(feet[i])]
+        choice = [j for j in near if areas[j].allows(feet[i])]
         if i == 1 and first_patch is not None:
             choice = [j for j in choice if j == first_patch]
         if not choice:
@@ -324,7 +349,7 @@ def plan_preview(
         s = prog.var(len(choice), 0.0, 1.0, integer=True)
         prog.row([(sj, 1.0) for sj in s], 1, 1)
         for j, sj in zip(choice, s, strict=True):
-            lo, hi = course.patches[j].foothold_box(*margin_m)
+            lo, hi = areas[j].foothold_box(*margin_m)
             for p, a in ((px[i], 0), (py[i], 1)):
                 prog.row([(p, 1), (sj, -_BIG_M)], lo[a] - _BIG_M, np.inf)
                 prog.row([(p, 1), (sj, _BIG_M)], -np.inf, hi[a] + _BIG_M)

@@ -389,6 +389,7 @@ def _summarise(
         "step_durations_s": [round(x, 4) for x in controller.step_durations_s],
         "mpc": None if stats is None else stats.summary(),
         "dt_policy": controller.dt_policy_summary(),
+        "swing_events": controller.swing_events,
         "wall_time_s": wall_s,
         "render_time_s": render_wall_s,
         "torque_limits_nm": sorted({float(x) for x in sim.model.actuator_ctrlrange[:, 1]}),
