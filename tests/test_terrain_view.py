@@ -59,9 +59,9 @@ def test_swings_assume_a_height_where_the_obstacles_height_is_unknown() -> None:
     start, target = np.array([1.35, 0.0, 0.01]), np.array([1.65, 0.0, 0.01])
     known_cfg = replace(preview_walk_config(), preview=None)
     known = KDWalkController(robot, walk_terrain(course, known_cfg), cmd, config=known_cfg)
-    assert known._swing_obstacles(start, target) == [pytest.approx((1.45, 1.55, 0.03))]
+    assert known.obstacles.near(start, target) == [pytest.approx((1.45, 1.55, 0.03))]
     cfg = replace(known_cfg, obstacle_heights=False, unknown_obstacle_height_m=0.05)
     blind = KDWalkController(robot, walk_terrain(course, cfg), cmd, config=cfg)
     assert blind.terrain_knowledge()["obstacle_heights"] is False
-    assert blind._swing_obstacles(start, target) == [pytest.approx((1.45, 1.55, 0.05))]
-    assert blind._swing_obstacles(start - 1.0, target - 1.0) == []  # none near that swing
+    assert blind.obstacles.near(start, target) == [pytest.approx((1.45, 1.55, 0.05))]
+    assert blind.obstacles.near(start - 1.0, target - 1.0) == []  # none near that swing

@@ -26,6 +26,7 @@ from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import MomentumPrediction
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+from gaitnet_mpc.control.swing_obstacles import SwingObstacles
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
 from gaitnet_mpc.control.walking_base import WalkingBase
@@ -42,7 +43,6 @@ from gaitnet_mpc.gait.preview import PreviewPlan, plan_areas, plan_preview
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.geometry import heading_axes
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
-from gaitnet_mpc.kinematics.shank_clearance import shank_capsules, swing_shank_clearance_m
 from gaitnet_mpc.mpc.dt_nlp import NLPDt
 from gaitnet_mpc.mpc.dt_oracle import OracleDt
 from gaitnet_mpc.mpc.sequential import (
@@ -56,7 +56,7 @@ from gaitnet_mpc.mpc.sequential import (
 )
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
-from gaitnet_mpc.terrain import Obstacle, Patch
+from gaitnet_mpc.terrain import Patch
 
 
 def _kd_raibert(planar: bool) -> RaibertHeuristic:
@@ -114,10 +114,7 @@ class KDWalkController(WalkingBase):
             robot, terrain, command, schedule, self.config.low_level, self.config.max_accel_mps2
         )
         self.raibert = _kd_raibert(robot.spec.planar)
-        self._raised_top_m: dict[tuple[float, ...], float] = {}  # footprint -> raised top
-        self._swing_events: list[dict[str, Any]] = []
-        self._shanks = shank_capsules(robot)
-        self._pin_data = robot.pin_model.createData()
+        self.obstacles = SwingObstacles(robot, terrain, self.config)
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
@@ -129,10 +126,7 @@ class KDWalkController(WalkingBase):
         self._started_step = -1
         self.preview: PreviewPlan | None = None
         self._preview_t0_s = 0.0
-        self._touching = dict(state.foot_contact)  # each foot's contact sensor, last tick
-        self._raised_top_m.clear()
-        self._swing_events.clear()
-        self._shank_recorded_step = -1
+        self.obstacles.reset(state)
 
     def _prediction(self) -> MomentumPrediction | None:
         plan = self.plan
@@ -155,7 +149,7 @@ class KDWalkController(WalkingBase):
 
     @property
     def swing_events(self) -> list[dict[str, Any]]:
-        return list(self._swing_events)
+        return list(self.obstacles.events)
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
@@ -442,116 +436,18 @@ class KDWalkController(WalkingBase):
             if sched.phase_in_step < self.config.retarget_until_phase:
                 start = self.liftoff[swing]
                 self.swing.retarget(
-                    td, sched.time_in_step_s, obstacles=self._swing_obstacles(start, td)
+                    td, sched.time_in_step_s, obstacles=self.obstacles.near(start, td)
                 )
                 if not full:
-                    self._check_shank(state)
+                    self.obstacles.check_shank(state, sched, self.swing, self.plan, self.profile)
 
     def _swing_trajectory(self, target: np.ndarray) -> SwingTrajectory:
         """Swing of the step that starts, from its lift-off point to ``target``."""
         sched = self.schedule
         start = self.liftoff[sched.swing_foot]
         return self.config.swing.trajectory(
-            start, target, sched.current_step_duration_s, self._swing_obstacles(start, target)
+            start, target, sched.current_step_duration_s, self.obstacles.near(start, target)
         )
-
-    def _swing_obstacles(
-        self, start: np.ndarray, target: np.ndarray
-    ) -> list[tuple[float, float, float]]:
-        """``(x_min, x_max, top_z)`` of the obstacles near the swing from ``start`` to
-        ``target``; with ``obstacle_heights`` off, each is taken as
-        ``unknown_obstacle_height_m`` high (its footprint is known, its height not)."""
-        x0, x1 = sorted((start[0], target[0]))
-        behind_m, ahead_m = self.config.swing_obstacle_window_m
-        near = self.terrain.obstacle_footprints(x0 - behind_m, x1 + ahead_m)
-        return [(o.x_min, o.x_max, self._obstacle_top(o)) for o in near]
-
-    def _obstacle_top(self, ob: Obstacle) -> float:
-        """The top [m] a swing clears over ``ob``: its known top, or with
-        ``obstacle_heights`` off ``unknown_obstacle_height_m`` above its base; raised by
-        toe strikes on it (:meth:`_toe_strike`)."""
-        if self.terrain.knowledge.obstacle_heights:
-            top = ob.z_top_m
-        else:
-            top = ob.z_base_m + self.config.unknown_obstacle_height_m
-        return max(top, self._raised_top_m.get(_footprint(ob), -np.inf))
-
-    def _toe_strike(self, state: RobotState, swing: str, t_in_step_s: float) -> None:
-        """Lift and re-place a swing foot that struck an obstacle.
-
-        A strike is the swing foot's contact sensor turning on while the foot (its toe
-        and heel extent, 1 cm wider) is over or against a known obstacle footprint:
-        footholds keep off footprints by more than that (``foothold_obstacle_clearance_m``
-        and the eq. 24 margin), so a planned touchdown never counts. Each obstacle the foot
-        meets is then taken as ``toe_strike_raise_m`` higher than the foot point or than
-        its previous top, and the rest of the swing is re-planned over it to the same
-        target (:meth:`SwingTrajectory.retarget`: a new apex, continuous with the plan so
-        far). Re-planning from the measured foot position instead, with a lift in place,
-        jerked the foot: the 8 and 10 cm boxes of the design record fell that way.
-        """
-        touching, before = state.foot_contact, self._touching
-        self._touching = dict(touching)
-        raise_m = self.config.toe_strike_raise_m
-        if raise_m <= 0.0 or not touching[swing] or before[swing] or self.swing is None:
-            return
-        p = state.foot_pos_world_m[swing]
-        spec, margin = self.robot.spec, 0.01
-        near = [
-            ob
-            for ob in self.terrain.obstacle_footprints(
-                p[0] - spec.foot_heel_m - margin, p[0] + spec.foot_toe_m + margin
-            )
-            if ob.y_min - margin <= p[1] <= ob.y_max + margin
-        ]
-        if not near:
-            return
-        for ob in near:
-            self._raised_top_m[_footprint(ob)] = max(self._obstacle_top(ob), float(p[2])) + raise_m
-        self._swing_events.append({
-            "kind": "toe_strike", "t_s": round(state.t_s, 4), "foot": swing,
-            "foot_pos_m": [round(float(x), 4) for x in p],
-            "obstacle_tops_m": [round(self._obstacle_top(ob), 4) for ob in near],
-        })  # fmt: skip
-        obstacles = self._swing_obstacles(self.liftoff[swing], self.swing.p1_world_m)
-        self.swing.retarget(self.swing.p1_world_m, t_in_step_s, obstacles=obstacles)
-
-    def _check_shank(self, state: RobotState) -> None:
-        """Check the swing leg's shank against the obstacles along the rest of the planned
-        swing (:mod:`~gaitnet_mpc.kinematics.shank_clearance`: trunk from the plan's
-        reference, the leg by the IK to the planned foot path) and record, once per step,
-        a plan that passes it less than ``shank_clearance_m`` above an obstacle's assumed
-        top (``swing_events``, kind "shank", with the clearances).
-
-        Only recorded, not acted on: the shank reaches over a box only with the foot beside
-        it (leaning back at a touchdown just past it, forward at a lift-off just before
-        it), where raising the swing changes nothing; how far footholds keep off a box is
-        ``foothold_obstacle_clearance_m``'s (docs/design/obstacles.md)."""
-        sched, swing, plan = self.schedule, self.swing, self.plan
-        foot = sched.swing_foot
-        capsule = self._shanks.get(foot)
-        if swing is None or plan is None or capsule is None or len(swing.obstacles) == 0:
-            return
-        if self._shank_recorded_step == sched.step_index:
-            return
-        t_now = sched.time_in_step_s
-        times = np.linspace(t_now, swing.duration_s, 10)
-        ref = plan.reference
-        rel = times - t_now + (state.t_s - plan.t_plan_s)  # on the plan's clock
-        p_base = np.stack([np.interp(rel, ref.times_s, ref.p_base_ref[:, a]) for a in range(3)], 1)
-        k = np.minimum(np.searchsorted(ref.times_s, rel), ref.times_s.size - 1)
-        yaw = None
-        if not self.robot.spec.planar:
-            yaw = np.array([self.profile.heading_rad(state.t_s + t - t_now) for t in times])
-        clear = swing_shank_clearance_m(
-            self.robot, self._pin_data, capsule, foot, p_base, ref.rot_base_ref[k],
-            swing.position(times), swing.obstacles, yaw,
-        )  # fmt: skip
-        if np.min(clear) < self.config.shank_clearance_m:
-            self._shank_recorded_step = sched.step_index
-            event = {"kind": "shank", "t_s": round(state.t_s, 4), "foot": foot}
-            event["clearance_m"] = [round(float(c), 4) for c in clear]
-            event["obstacle_tops_m"] = [round(float(o[2]), 4) for o in swing.obstacles]
-            self._swing_events.append(event)
 
     def _start_step(self, state: RobotState) -> None:
         sched = self.schedule
@@ -564,7 +460,7 @@ class KDWalkController(WalkingBase):
             target = self._on_preview(target, 1)
         self.swing = self._swing_trajectory(target)
         self._solve(state, full=True)
-        self._check_shank(state)
+        self.obstacles.check_shank(state, sched, self.swing, self.plan, self.profile)
         self._steps.append(sched.current_step_duration_s)
         self.next_replan_s = state.t_s + self.config.replan_period_s
 
@@ -587,7 +483,8 @@ class KDWalkController(WalkingBase):
                 [self.plan.iterate.f[k, i], self.plan.iterate.tau[k, i]]
             )
         t = sched.time_in_step_s
-        self._toe_strike(state, swing, t)
+        if self.swing is not None:
+            self.obstacles.toe_strike(state, swing, self.swing, self.liftoff[swing], t)
         yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         assert self.swing is not None  # made by _start_step, which the first tick runs
         p_swing, v_swing, a_swing = self.swing.sample(t)
@@ -595,8 +492,3 @@ class KDWalkController(WalkingBase):
             p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)
         target = {swing: (p_swing, v_swing, a_swing)}
         return self.low.torques(state, wrench, target, yaw)
-
-
-def _footprint(ob: Obstacle) -> tuple[float, ...]:
-    """A key of one obstacle: its footprint."""
-    return (ob.x_min, ob.x_max, ob.y_min, ob.y_max)
