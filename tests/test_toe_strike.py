@@ -1,6 +1,6 @@
 """Toe strikes on an obstacle taller than the robot assumes: detected by the swing foot's
 contact sensor, the obstacle's assumed top raised, the swing re-planned over it
-(``KDWalkController._toe_strike``, ``KDWalkConfig.toe_strike_raise_m``)."""
+(``SwingObstacles.toe_strike``, ``KDWalkConfig.toe_strike_raise_m``)."""
 
 from __future__ import annotations
 

@@ -162,7 +162,7 @@ class KDWalkConfig:
         0.04, "[0, 0.2] m", "a height", "0.2 m is above the humanoid's shin"
     )
     # Least height of the swing leg's shank capsule above an obstacle along the planned
-    # swing; a plan that passes lower is recorded (KDWalkController._check_shank). The
+    # swing; a plan that passes lower is recorded (SwingObstacles.check_shank). The
     # foot's own margin is swing.clearance_m.
     shank_clearance_m: float = bounded(0.01, "[0, 0.1] m", "a margin", "0.1 m is a shin")
     # Obstacles the swing trajectory clears: those from this far behind the lift-off to
