@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -317,16 +318,20 @@ class KDWalkController(WalkingBase):
         assert c.preview is not None
         return c.foothold_margin_m, c.preview.foothold_margin_y_m
 
-    def _preview_area(self, step: int) -> Patch:
-        """The landing area (a patch less the obstacles' footprints) of the preview's
-        foothold of ``step``."""
-        assert self.preview is not None
-        areas = plan_areas(
+    @cached_property
+    def _preview_areas(self) -> tuple[Patch, ...]:
+        """The landing areas (patches less the obstacles' footprints) the preview plans on;
+        the course and the margins are fixed for the controller."""
+        return plan_areas(
             self.terrain.course_for_multi_step_preview(),
             self.config.foothold_obstacle_clearance_m,
             self._margins,
         )
-        return areas[self.preview.patch[step]]
+
+    def _preview_area(self, step: int) -> Patch:
+        """The landing area of the preview's foothold of ``step``."""
+        assert self.preview is not None
+        return self._preview_areas[self.preview.patch[step]]
 
     def _on_preview(self, p: np.ndarray, step: int) -> np.ndarray:
         """``p`` (a heuristic foothold) with x from the preview's foothold of ``step`` (1 =
@@ -483,10 +488,9 @@ class KDWalkController(WalkingBase):
                 [self.plan.iterate.f[k, i], self.plan.iterate.tau[k, i]]
             )
         t = sched.time_in_step_s
-        if self.swing is not None:
-            self.obstacles.toe_strike(state, swing, self.swing, self.liftoff[swing], t)
-        yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         assert self.swing is not None  # made by _start_step, which the first tick runs
+        self.obstacles.toe_strike(state, swing, self.swing, self.liftoff[swing], t)
+        yaw = None if self.robot.spec.planar else self.profile.heading_rad(state.t_s)
         p_swing, v_swing, a_swing = self.swing.sample(t)
         if yaw is not None and self.config.keep_feet_apart:
             p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)

@@ -48,7 +48,7 @@ from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.robots.spec import FEET
 from gaitnet_mpc.terrain import Course, Patch
 
-__all__ = ["PreviewConfig", "PreviewPlan", "plan_preview"]
+__all__ = ["PreviewConfig", "PreviewPlan", "plan_areas", "plan_preview"]
 
 _BIG_M = 50.0  # big-M of the patch constraints [m]; larger than any course
 #: Ranges of a distance a leg spans and of a CoM speed (the fastest command is 1.5 m/s).
@@ -199,19 +199,10 @@ def plan_areas(
     course: Course, obstacle_clearance_m: float | None, margin_m: tuple[float, float]
 ) -> tuple[Patch, ...]:
     """The areas a preview plans footholds on: the course's patches (None), or its landing
-    areas with the obstacles' footprints widened by ``obstacle_clearance_m`` cut out
-    (:meth:`Course.landing_areas`), a cut part only where it holds the (x, y) margins
-    ``margin_m`` on both sides (as the one-step preview's
-    :meth:`Course.reachable_foothold_bounds`)."""
-    if obstacle_clearance_m is None:
-        return course.patches
-    areas, parent = course.landing_areas(obstacle_clearance_m)
-    return tuple(
-        a
-        for a, j in zip(areas, parent, strict=True)
-        if a is course.patches[j]
-        or (a.x_max - a.x_min >= 2 * margin_m[0] and a.y_max - a.y_min >= 2 * margin_m[1])
-    )
+    areas with the obstacles' footprints widened by ``obstacle_clearance_m`` cut out, as
+    the one-step preview's (:meth:`Course.foothold_areas` with the (x, y) margins
+    ``margin_m``)."""
+    return course.foothold_areas(obstacle_clearance_m, *margin_m)[0]
 
 
 def plan_preview(

@@ -252,18 +252,9 @@ class Course:
             ``(p_min (3,), p_max (3,), index of the patch the box lies on, or None)``.
         """
         margin_y = margin_m if margin_y_m is None else margin_y_m
-        if obstacle_clearance_m is None:
-            areas, parent = self.patches, tuple(range(len(self.patches)))
-        else:
-            areas, parent = self.landing_areas(obstacle_clearance_m)
-        keep = [
-            k
-            for k, a in enumerate(areas)
-            if a is self.patches[parent[k]]
-            or (a.x_max - a.x_min >= 2.0 * margin_m and a.y_max - a.y_min >= 2.0 * margin_y)
-        ]
+        areas, parent = self.foothold_areas(obstacle_clearance_m, margin_m, margin_y)
         lo, hi, k = reachable_foothold_bounds(
-            [areas[k] for k in keep],
+            areas,
             p_com_td_xy,
             foot,
             p_nominal_xy,
@@ -273,7 +264,25 @@ class Course:
             margin_y_m=margin_y_m,
             reach_back_m=reach_back_m,
         )
-        return lo, hi, (None if k is None else parent[keep[k]])
+        return lo, hi, (None if k is None else parent[k])
+
+    def foothold_areas(
+        self, obstacle_clearance_m: float | None, margin_x_m: float, margin_y_m: float
+    ) -> tuple[tuple[Patch, ...], tuple[int, ...]]:
+        """``(areas, parent)``: the :meth:`landing_areas` (None: the patches whole) that can
+        hold a foot centre ``margin_x_m`` / ``margin_y_m`` from their edges: a whole patch
+        always, a part cut by an obstacle only where it is at least twice the margins long
+        and wide; and the patch index of each."""
+        if obstacle_clearance_m is None:
+            return self.patches, tuple(range(len(self.patches)))
+        areas, parent = self.landing_areas(obstacle_clearance_m)
+        keep = [
+            k
+            for k, a in enumerate(areas)
+            if a is self.patches[parent[k]]
+            or (a.x_max - a.x_min >= 2.0 * margin_x_m and a.y_max - a.y_min >= 2.0 * margin_y_m)
+        ]
+        return tuple(areas[k] for k in keep), tuple(parent[k] for k in keep)
 
     def landing_areas(
         self, obstacle_clearance_m: float = 0.0
