@@ -9,8 +9,9 @@ Run::
    every CMPC QP it solves is kept with the iterate it was built about.
 2. Each QP is solved ``--rounds`` times by both forms, interleaved QP by QP: the sparse
    QP by the controller's PIQP workspace (``QPSolution.solve_time_s``: update + solve +
-   conversions), the condensed one by :class:`~gaitnet_mpc.mpc.kd_condensed.KDCondensed`
-   (condensing + DAQP + expansion). Time per QP: the minimum over the rounds.
+   conversions, not the sparse QP's assembly), the condensed one as the controller solves
+   it (``KDSubproblem._solve_condensed``: foot bounds, the compiled condensing straight
+   from the iterate, DAQP, expansion). Time per QP: the minimum over the rounds.
 3. Accuracy, on the sparse QP: objective gap, largest constraint violation, and the
    largest difference of the foot and CoM positions and of the wrenches from PIQP's.
 
@@ -28,9 +29,9 @@ import numpy as np
 from common import add_out_option, command_line, machine_info, write_report
 
 
-def record(course: str, seconds: float) -> tuple[Any, list[tuple[Any, ...]]]:
+def record(course: str, seconds: float) -> tuple[Any, list[tuple[Any, Any]]]:
     """The subproblem and the QPs ``gaitnet`` solves walking ``seconds`` on ``course``:
-    ``(problem, wrench iterate, foot iterate, contact)`` each."""
+    ``(iterate, inputs)`` each."""
     from gaitnet_mpc.mpc.implicit_kd import KDSubproblem
     from gaitnet_mpc.runner.episode import run_episode
     from gaitnet_mpc.scenario import build_episode, make_scenario
@@ -41,14 +42,12 @@ def record(course: str, seconds: float) -> tuple[Any, list[tuple[Any, ...]]]:
     )
     episode = build_episode(scenario)
     sub: KDSubproblem = episode.controller.mpc.subproblem
-    kept: list[tuple[Any, ...]] = []
+    kept: list[tuple[Any, Any]] = []
     solve = sub.solve
 
     def keep(iterate: Any, inputs: Any) -> Any:
-        step = solve(iterate, inputs)
-        wrench = np.stack([iterate.f, iterate.tau])
-        kept.append((step.solution.problem, wrench, iterate.p_foot.copy(), inputs.contact.copy()))
-        return step
+        kept.append((iterate, inputs))
+        return solve(iterate, inputs)
 
     sub.solve = keep  # type: ignore[method-assign]
     run_episode(episode.sim, episode.controller, scenario.command, seconds, progress=False)
@@ -61,8 +60,6 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     add_out_option(parser, "kd_qp_condensed.md")
     args = parser.parse_args()
-    from gaitnet_mpc.mpc.kd_condensed import KDCondensed
-
     lines = [
         "# KD controller QPs: condensed DAQP against sparse PIQP (issue 47, step 2)",
         "",
@@ -82,24 +79,24 @@ def main() -> None:
     ]
     for course in ("flat", "gap"):
         sub, kept = record(course, args.seconds)
-        n_sep = sub.horizon if sub.config.min_foot_separation_m is not None else 0
-        dense = KDCondensed(sub.layout, sub.n_wrench_rows, n_sep)
         t_piqp = np.full(len(kept), np.inf)
         t_cond = np.full(len(kept), np.inf)
         gap, viol, d_pos, d_wrench, n_u, iters, failures = [], [], [], [], [], [], 0
         for r in range(args.rounds):
-            for q, (problem, wrench, p_foot, contact) in enumerate(kept):
+            for q, (iterate, inputs) in enumerate(kept):
+                problem = sub.build(iterate, inputs)
                 ref = sub.workspace.solve(problem)
                 t_piqp[q] = min(t_piqp[q], ref.solve_time_s)
                 t0 = time.perf_counter()
-                ours = dense.solve(problem, wrench, p_foot, contact)
+                ours, _ = sub._solve_condensed(iterate, inputs)
                 t_cond[q] = min(t_cond[q], time.perf_counter() - t0)
                 if r:
                     continue
                 if not (ours.found and ref.found):
                     failures += 1
                     continue
-                n_u.append(dense.condense(problem, wrench, p_foot, contact).n_u)
+                ours.problem = problem
+                n_u.append(sub.condensed_qp(iterate, inputs).n_u)
                 iters.append(ours.iterations)
                 gap.append(abs(ours.obj - ref.obj) / max(1.0, abs(ref.obj)))
                 viol.append(ours.primal_residual)

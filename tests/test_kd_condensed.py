@@ -46,21 +46,27 @@ def test_condensed_matches_sparse_on_random_subproblems(extra: dict[str, Any]) -
     sparse = KDSubproblem(KDConfig(mass_kg=MASS, horizon=6, **extra))
     condensed = KDSubproblem(KDConfig(mass_kg=MASS, horizon=6, qp_form="condensed", **extra))
     assert condensed.condensed is not None
-    solved = 0
+    schedules: set[bytes] = set()
     for seed in range(40):
         args, it = random_case(seed)
         inputs = sparse.inputs(it, **args)
         problem = sparse.build(it, inputs)
         ref = sparse.workspace.solve(problem)
-        wrench = np.stack([it.f, it.tau])
-        ours = condensed.condensed.solve(problem, wrench, it.p_foot, inputs.contact)
+        ours = _condensed_solution(condensed, it, inputs)
         if ref.status == "infeasible":  # random bounds can exclude each other
             assert ours.status == "infeasible"
             continue
         _agree(sparse, ours, ref)
-        solved += 1
-    assert solved >= 10
-    assert condensed.condensed.n_structures >= 10  # many schedules, each condensed anew
+        schedules.add(inputs.contact.tobytes())
+    assert len(schedules) >= 10  # many contact schedules solved
+
+
+def _condensed_solution(sub: KDSubproblem, it: KDIterate, inputs: Any) -> Any:
+    """The condensed form's DAQP solution, on the sparse QP (for its objective and
+    residual there)."""
+    sol, _ = sub._solve_condensed(it, inputs)
+    sol.problem = sub.build(it, inputs)
+    return sol
 
 
 def test_condensed_form_is_small() -> None:
@@ -75,11 +81,14 @@ def test_condensed_form_is_small() -> None:
         it, np.zeros(12), np.zeros((11, 6)), np.zeros((11, 6)), np.zeros((10, 2, 3)),
         np.zeros((11, 3)), np.full(10, 0.05), contact, np.zeros((10, 2)),
     )  # fmt: skip
-    problem = sub.build(it, inputs)
-    assert sub.condensed is not None
-    dense = sub.condensed.condense(problem, np.stack([it.f, it.tau]), it.p_foot, contact)
+    dense = sub.condensed_qp(it, inputs)
     assert dense.n_u == 62 and dense.qp["H"].shape == (62, 62)
-    assert dense.expand(np.zeros(62)).shape == (problem.n,)
+    parts = dense.expand(np.zeros(62))
+    assert sub.layout.pack(parts).shape == (sub.layout.n,)
+    # u = 0 keeps the fixed stance foot at its measured place and the swing foot's wrench
+    # at zero: the point the condensing fixes
+    np.testing.assert_array_equal(parts["delta_f"][:, 1], -it.f[:, 1])
+    np.testing.assert_array_equal(parts["delta_p_foot"][:, 0], 0.0)
 
 
 def test_failed_condensed_solve_falls_back_to_the_sparse_qp() -> None:
@@ -113,7 +122,8 @@ def test_condensed_matches_sparse_in_the_walking_loop() -> None:
     def checked(iterate: KDIterate, inputs: Any) -> Any:
         nonlocal n_checked
         step = solve(iterate, inputs)
-        problem = step.solution.problem
+        problem = sub.build(iterate, inputs)
+        step.solution.problem = problem
         _agree(sub, step.solution, sub.workspace.solve(problem))
         n_checked += 1
         return step
@@ -130,4 +140,4 @@ def test_daqp_missing_is_a_config_error(monkeypatch: pytest.MonkeyPatch) -> None
 
     monkeypatch.setattr(mod, "daqp", None)
     with pytest.raises(ConfigError, match="daqp"):
-        KDCondensed(KDSubproblem(KDConfig(mass_kg=MASS)).layout, 10, 0)
+        KDCondensed(KDConfig(mass_kg=MASS))

@@ -70,11 +70,11 @@ def test_failed_qp_keeps_last_plan_and_is_counted(
 
         real_condensed = KDCondensed.solve
 
-        def flaky_condensed(self: Any, problem: Any, *args: Any) -> Any:
-            sol = real_condensed(self, problem, *args)
+        def flaky_condensed(self: Any, dense: Any) -> Any:
+            sol, parts = real_condensed(self, dense)
             if window["on"]:
                 sol.found, sol.status = False, "infeasible"
-            return sol
+            return sol, parts
 
         monkeypatch.setattr(KDCondensed, "solve", flaky_condensed)
     # the MPC solves the injected failures made fail (a solve may call the backend more

@@ -112,7 +112,7 @@ class StanceWrenchRows:
         #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
         self.full_column_rank = bool(np.linalg.matrix_rank(c_rows) == 6)
         self._cache: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        self._last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self._last: tuple[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     def at(self, yaw_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Stance rows ``C`` (m, 6) and bounds ``l, u`` (m,) at ``yaw_rad``, memoised."""
@@ -126,7 +126,7 @@ class StanceWrenchRows:
             self._cache[yaw_rad] = rows
         return rows
 
-    def stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, ...]:
+    def stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Stance rows ``C`` (..., m, 6) and bounds ``l, u`` (..., m) at every yaw of
         ``foot_yaw_rad`` (...); read-only, and the last result is kept (the yaws are fixed
         within a sequential solve)."""

@@ -95,6 +95,8 @@ timings (:mod:`~gaitnet_mpc.mpc.kd_config`), the tie groups
 
 from __future__ import annotations
 
+import math
+import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -102,6 +104,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.mpc import kd_condensed_kernel as condensed_kernel
 from gaitnet_mpc.mpc.centroidal_model import (
     N_FEET,
     NX,
@@ -111,12 +114,12 @@ from gaitnet_mpc.mpc.centroidal_model import (
 )
 from gaitnet_mpc.mpc.contact import StanceWrenchRows
 from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask, tie_groups
-from gaitnet_mpc.mpc.kd_condensed import KDCondensed
+from gaitnet_mpc.mpc.kd_condensed import CondensedQP, KDCondensed
 from gaitnet_mpc.mpc.kd_config import KDConfig
 from gaitnet_mpc.mpc.kd_inputs import KDInputs
 from gaitnet_mpc.mpc.kd_iterate import KDIterate, KDStep, KDTolerances
 from gaitnet_mpc.mpc.kd_layout import KDLayout
-from gaitnet_mpc.mpc.qp import QPProblem, QPWorkspace, make_workspace
+from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, QPWorkspace, make_workspace
 from gaitnet_mpc.mpc.qp.pattern import BlockPattern
 
 #: Bound of a "free" foot tie row [m]: finite so that no row has two infinite bounds (PIQP
@@ -157,8 +160,7 @@ class KDSubproblem:
         #: The condensed form's solver (``config.qp_form == "condensed"``), else None.
         self.condensed: KDCondensed | None = None
         if c.qp_form == "condensed":
-            n_sep = h if c.min_foot_separation_m is not None else 0
-            self.condensed = KDCondensed(lay, self.n_wrench_rows, n_sep)
+            self.condensed = KDCondensed(c)
         #: Condensed solves that failed and were repeated on the sparse QP.
         self.n_fallbacks = 0
 
@@ -358,8 +360,9 @@ class KDSubproblem:
         # ---- box: foot positions (measured stance foot, eq. 24, trust region)
         lb = np.full(self.n, -np.inf)
         ub = np.full(self.n, np.inf)
-        for i in range(N_FEET):
-            self._foot_box(i, it, a, lb, ub)
+        lo_pf, hi_pf = self.foot_bounds(it, a)
+        lb[self._col_pf] = lo_pf - it.p_foot
+        ub[self._col_pf] = hi_pf - it.p_foot
         if c.trust_region_com_m is not None:
             lb[self._col_pc[1:]] = -c.trust_region_com_m
             ub[self._col_pc[1:]] = c.trust_region_com_m
@@ -388,54 +391,27 @@ class KDSubproblem:
         d = it.p_foot[:, 0, :2] - it.p_foot[:, 1, :2]
         return n_y, np.einsum("kj,kj->k", n_y, d)
 
-    def _foot_box(self, i: int, it: KDIterate, a: KDInputs, lb: np.ndarray, ub: np.ndarray) -> None:
-        """Box on ``delta p_f`` of foot ``i``, per tie group, in absolute positions.
-
-        Per group (:func:`~gaitnet_mpc.mpc.foot_ties.tie_groups`: swing stages, then the
-        stance stages after them): the measured position for the measured stance group;
+    def foot_bounds(self, it: KDIterate, a: KDInputs) -> tuple[np.ndarray, np.ndarray]:
+        """Absolute bounds ``lo, hi`` (h, 2, 3) on each stage's foot position: per tie
+        group (:func:`~gaitnet_mpc.mpc.foot_ties.tie_groups`: swing stages, then the
+        stance stages after them), the measured position for the measured stance group;
         else the eq. 24 box if the group holds a masked stage, the reference height (mean
         over the group's stance stages, or all its stages) unless that box bounds the
-        height, and the trust region around the group's mean iterate. Groups are
-        contiguous stage ranges, so plain Python over the few groups with slices is
-        cheapest here.
-        """
+        height, and the trust region around the group's mean iterate
+        (:func:`~gaitnet_mpc.mpc.kd_condensed_kernel.foot_bounds`)."""
         c = self.config
-        h = self.horizon
-        contact_i = a.contact[:, i].tolist()
-        starts = [0] + [k for k in range(1, h) if contact_i[k - 1] and not contact_i[k]]
-        ends = [*starts[1:], h]
-        n_groups = len(starts)
-        p_it = it.p_foot[:, i]  # (h, 3)
-        lo = np.full((n_groups, 3), -np.inf)  # absolute bounds per group
-        hi = np.full((n_groups, 3), np.inf)
-        centre = np.zeros((n_groups, 3))  # mean iterate per group
-        bounds = a.foothold_bounds[i]
-        mask = None if bounds is None else bounds[2].tolist()
-        measured = contact_i[0]  # group 0 is the measured stance foot: fixed
-        ref_z = a.p_foot_ref[:, i, 2]
-        for g in range(1 if measured else 0, n_groups):
-            s0, s1 = starts[g], ends[g]
-            centre[g] = np.add.reduce(p_it[s0:s1], axis=0) / (s1 - s0)  # == .mean(axis=0)
-            if mask is not None and any(mask[s0:s1]):
-                lo[g], hi[g] = bounds[0], bounds[1]  # type: ignore[index]
-            if c.foot_height_from_reference and not (
-                np.isfinite(lo[g, 2]) and np.isfinite(hi[g, 2])
-            ):
-                n_stance = sum(contact_i[s0:s1])  # stance stages end the group
-                z0 = s1 - n_stance if n_stance else s0
-                lo[g, 2] = hi[g, 2] = float(np.add.reduce(ref_z[z0:s1]) / (s1 - z0))
-        if c.trust_region_m is not None:
-            t_lo = np.maximum(lo, centre - c.trust_region_m)
-            t_hi = np.minimum(hi, centre + c.trust_region_m)
-            ok = t_lo <= t_hi  # trust box misses the foothold box: drop it there
-            lo = np.where(ok, t_lo, lo)
-            hi = np.where(ok, t_hi, hi)
-        if measured:
-            lo[0] = hi[0] = a.p_foot_measured[i]
-        groups = np.repeat(np.arange(n_groups), np.subtract(ends, starts))  # (h,)
-        cols = self._col_pf[:, i]  # (h, 3)
-        lb[cols] = lo[groups] - p_it
-        ub[cols] = hi[groups] - p_it
+        has_box = np.zeros(N_FEET, dtype=bool)
+        box = np.zeros((2, N_FEET, 3))
+        mask = np.zeros((N_FEET, self.horizon), dtype=bool)
+        for i, bounds in enumerate(a.foothold_bounds):
+            if bounds is not None:
+                has_box[i] = True
+                box[0, i], box[1, i], mask[i] = bounds
+        return condensed_kernel.foot_bounds(
+            a.contact, it.p_foot, np.ascontiguousarray(a.p_foot_ref[:, :, 2]),
+            a.p_foot_measured, has_box, box[0], box[1], mask, c.foot_height_from_reference,
+            math.nan if c.trust_region_m is None else float(c.trust_region_m),
+        )  # fmt: skip
 
     def plan_cost(self, iterate: KDIterate, states: np.ndarray, inputs: KDInputs) -> float:
         """Eq. 18 at a plan: ``iterate`` (footholds, CoM path, wrenches) with the predicted
@@ -453,22 +429,44 @@ class KDSubproblem:
         )
 
     # ------------------------------------------------------------------ solve
+    def condensed_qp(self, iterate: KDIterate, inputs: KDInputs) -> CondensedQP:
+        """The condensed form of the QP of :meth:`build` (``qp_form="condensed"``)."""
+        assert self.condensed is not None
+        wrench_rows = self._wrench.stack(inputs.foot_yaw_rad)
+        lo, hi = self.foot_bounds(iterate, inputs)
+        return self.condensed.condense(iterate, inputs, wrench_rows, lo, hi)
+
+    def _solve_condensed(
+        self, iterate: KDIterate, inputs: KDInputs
+    ) -> tuple[QPSolution, dict[str, np.ndarray] | None]:
+        """DAQP on the condensed QP; a solution DAQP calls inaccurate is found if its
+        primal residual on the sparse QP is at most 1e-3."""
+        assert self.condensed is not None
+        start = time.perf_counter()
+        sol, parts = self.condensed.solve(self.condensed_qp(iterate, inputs))
+        if parts is not None:
+            sol.x = self.layout.pack(parts)
+            if sol.status == "solved_inaccurate":
+                sol.problem = self.build(iterate, inputs)
+                residual = sol.primal_residual
+                sol.found = residual is not None and residual <= 1e-3
+        sol.solve_time_s = time.perf_counter() - start
+        return sol, parts
+
     def solve(self, iterate: KDIterate, inputs: KDInputs) -> KDStep:
         """Build (see :meth:`build`) and solve the CMPC QP; return the search directions.
 
         Raises:
             QPSolveError: the backend found no usable solution.
         """
-        problem = self.build(iterate, inputs)
-        sol = None
+        parts = None
         if self.condensed is not None:
-            wrench = np.stack([iterate.f, iterate.tau])
-            sol = self.condensed.solve(problem, wrench, iterate.p_foot, inputs.contact)
+            sol, parts = self._solve_condensed(iterate, inputs)
             self.n_fallbacks += not sol.found  # then the sparse QP with qp_backend
-        if sol is None or not sol.found:
-            sol = self.workspace.solve_or_raise(problem)
-        assert sol.x is not None  # found, so given
-        parts = self.layout.unpack(sol.x)
+        if parts is None or not sol.found:
+            sol = self.workspace.solve_or_raise(self.build(iterate, inputs))
+            assert sol.x is not None  # found, so given
+            parts = self.layout.unpack(sol.x)
         parts["delta_p_com"][0] = 0.0
         return KDStep(
             delta_f=parts["delta_f"],

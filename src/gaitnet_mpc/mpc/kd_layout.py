@@ -57,5 +57,21 @@ class KDLayout:
             "delta_p_foot": u[:, 6 * N_FEET :].reshape(h, N_FEET, 3),
         }
 
+    def pack(self, parts: dict[str, np.ndarray]) -> np.ndarray:
+        """The QP vector (n,) of the parts that :meth:`unpack` returns."""
+        h = self.horizon
+        z = np.empty(self.n)
+        body = z[: NS * h].reshape(h, NS)
+        tail = z[NS * h :]
+        body[:, :NX] = parts["states"][:h]
+        tail[:NX] = parts["states"][h]
+        body[:, NX : NX + 3] = parts["delta_p_com"][:h]
+        tail[NX:] = parts["delta_p_com"][h]
+        u = body[:, NX + 3 :]
+        u[:, : 3 * N_FEET] = parts["delta_f"].reshape(h, 3 * N_FEET)
+        u[:, 3 * N_FEET : 6 * N_FEET] = parts["delta_tau"].reshape(h, 3 * N_FEET)
+        u[:, 6 * N_FEET :] = parts["delta_p_foot"].reshape(h, 3 * N_FEET)
+        return z
+
 
 __all__ = ["NS", "NU_STAGE", "KDLayout"]
