@@ -105,12 +105,10 @@ from gaitnet_mpc.kinematics.foot_plan import (
     heading_displacement,
     neutral_foothold,
 )
-from gaitnet_mpc.kinematics.leg_ik import whole_body_ik
 from gaitnet_mpc.kinematics.reference_workspace import (
     CentroidalReference,
     ReferenceConfig,
     ReferenceWorkspace,
-    configurations,
     rotations,
 )
 from gaitnet_mpc.robots.model import RobotModel
@@ -143,18 +141,14 @@ def _place_trunk(
     """
     cfg = ws.config
     rot = rotations(yaw_rad, cfg.trunk_pitch_rad)  # (h+1, 3, 3)
-    targets = {f: plan.p_foot_m[:, i] for i, f in enumerate(FEET)}
     yaw_targets = None  # None: q0 = 0 (eq. 31), the same when the feet face the trunk heading
     if not ws.planar and np.max(np.abs(wrap_angle(plan.foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
-        yaw_targets = {f: plan.foot_yaw_rad[:, i] for i, f in enumerate(FEET)}
+        yaw_targets = plan.foot_yaw_rad
     p_base = p_base_guess_m.copy()
     for it in range(cfg.com_iterations + 1):
-        sol = whole_body_ik(
-            ws.robot, p_base, rot, targets, foot_yaw_rad=yaw_targets, geometries=ws.geometries
-        )
-        q = configurations(ws, p_base, yaw_rad, cfg.trunk_pitch_rad, sol.joint_pos_rad)
+        q, reachable = ws.trunk_configurations(p_base, yaw_rad, rot, plan.p_foot_m, yaw_targets)
         if it == cfg.com_iterations:
-            return q, p_base, rot, sol.reachable
+            return q, p_base, rot, reachable
         err = p_com_target_m - ws._com(q)  # (h+1, 3)
         if ws.planar:
             err[:, 1] = 0.0
@@ -463,6 +457,8 @@ def update_reference(
     if ws.robot is not robot:
         raise ConfigError("robot", robot.name, "the robot the reference was made for")
     h = ref.horizon
+    if dts_s is not None and np.array_equal(dts_s, ref.timing.dts_s):
+        dts_s = None  # the same durations (every f_IK call of a sequential solve)
     timing = ref.timing if dts_s is None else ref.timing.with_dts(dts_s)
     times = timing.times_s
 

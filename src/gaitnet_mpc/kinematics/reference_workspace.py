@@ -21,6 +21,7 @@ from gaitnet_mpc.kinematics.leg_ik import (
     leg_geometries,
     whole_body_ik,
 )
+from gaitnet_mpc.kinematics.leg_ik_kernel import leg_ik_rows
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
@@ -99,6 +100,8 @@ class ReferenceWorkspace:
         self.mass_kg = float(pin.computeTotalMass(self.model))
         self.planar = bool(robot.spec.planar)
         self.contact_radius_m = float(robot.spec.foot_contact_radius_m)
+        self._nominal_joints = robot.nominal_joint_pos()
+        self._leg_columns = [robot.n_root_q + np.asarray(robot.leg_joint_index[f]) for f in FEET]
 
         q_nom, _ = robot.mj_to_pin(robot.standing_qpos(), np.zeros(robot.nv))
         com_nom = np.array(pin.centerOfMass(self.model, self.data, q_nom, False))
@@ -147,6 +150,55 @@ class ReferenceWorkspace:
         if not (sol.reachable.all() and np.all(gains[0] > 0.2) and np.all(gains[0] < 1.5)):
             raise RuntimeError(f"{self.robot.name}: implausible CoM gains {gains}")
         return gains[0], gains[1:]
+
+    def trunk_configurations(
+        self,
+        p_base_m: np.ndarray,
+        yaw_rad: np.ndarray,
+        rot: np.ndarray,
+        p_foot_m: np.ndarray,
+        foot_yaw_rad: np.ndarray | None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Configurations (N, nq) and reachability (N,) of trunk poses with both feet at
+        their targets: :func:`whole_body_ik` then :func:`configurations`, in one pass.
+
+        Args:
+            p_base_m: (N, 3) trunk positions; yaw_rad: (N,) trunk headings; rot: (N, 3, 3)
+                their rotations ``R_z(yaw) R_y(trunk_pitch)``.
+            p_foot_m: (N, 2, 3) foot targets [m], :data:`FEET` order.
+            foot_yaw_rad: (N, 2) foot headings, or None for ``q0 = 0`` (eq. 31).
+        """
+        pitch = self.config.trunk_pitch_rad
+        if self.planar:  # the sagittal IK of whole_body_ik
+            targets = {f: p_foot_m[:, i] for i, f in enumerate(FEET)}
+            sol = whole_body_ik(self.robot, p_base_m, rot, targets, geometries=self.geometries)
+            return configurations(self, p_base_m, yaw_rad, pitch, sol.joint_pos_rad), sol.reachable
+        n = p_base_m.shape[0]
+        p_base = np.ascontiguousarray(p_base_m)
+        rot = np.ascontiguousarray(rot)
+        root = self.robot.n_root_q
+        q = np.empty((n, self.model.nq))
+        q[:, root:] = self._nominal_joints
+        leg_q = np.empty((n, 5))
+        reach = np.empty(n, dtype=bool)
+        reachable = np.ones(n, dtype=bool)
+        no_yaw = np.zeros(n)
+        for i, f in enumerate(FEET):
+            g = self.geometries[f]
+            assert isinstance(g, LegGeometry)
+            yaw = no_yaw if foot_yaw_rad is None else np.ascontiguousarray(foot_yaw_rad[:, i])
+            leg_ik_rows(
+                np.ascontiguousarray(p_foot_m[:, i]), p_base, rot, yaw, foot_yaw_rad is not None,
+                g.p_yaw_trunk_m, g.p_roll_yaw_m, g.p_pitch_roll_m, g.thigh_m, g.shank_m,
+                g.p_foot_ankle_m, g.lower_rad, g.upper_rad, 1e-9, leg_q, reach,
+            )  # fmt: skip
+            q[:, self._leg_columns[i]] = leg_q
+            reachable &= reach
+        cz, sz = np.cos(0.5 * yaw_rad), np.sin(0.5 * yaw_rad)
+        ct, st = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+        q[:, 0:3] = p_base
+        q[:, 3], q[:, 4], q[:, 5], q[:, 6] = -sz * st, cz * st, sz * ct, cz * ct
+        return q, reachable
 
     def _com(self, q: np.ndarray) -> np.ndarray:
         """(N, 3) CoM of configurations q (N, nq) [m]."""

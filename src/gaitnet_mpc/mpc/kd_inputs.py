@@ -10,7 +10,7 @@ arrays of the right shapes (:class:`~gaitnet_mpc.errors.ConfigError` otherwise).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -103,6 +103,25 @@ class KDInputs:
         )
         bounds = _check_foothold_bounds(foothold_bounds, fields["contact"])
         return cls(**fields, p_foot_measured=measured, foothold_bounds=bounds)
+
+    def with_references(
+        self, h_ref: object, H_ref: object, p_foot_ref: object, p_com_ref: object, dts_s: object
+    ) -> KDInputs:
+        """These inputs with new references and stage times (the next iteration of a
+        sequential solve: the measured state, contacts, headings and foothold boxes are
+        the same), checked as in :meth:`check`."""
+        h = self.dts_s.shape[0]
+        dts = float_array("dts_s", dts_s, (h,))
+        if np.any(dts <= 0.0):
+            raise ConfigError("dts_s", dts.tolist(), "sampling times > 0 [s]")
+        return replace(
+            self,
+            h_ref=float_array("h_ref", h_ref, (h + 1, 6)),
+            H_ref=float_array("H_ref", H_ref, (h + 1, 6)),
+            p_foot_ref=float_array("p_foot_ref", p_foot_ref, (h, N_FEET, 3)),
+            p_com_ref=float_array("p_com_ref", p_com_ref, (h + 1, 3)),
+            dts_s=dts,
+        )
 
 
 def _check_foothold_bounds(

@@ -403,21 +403,16 @@ class SequentialKDMPC:
         converged = False
         n_qps = 0
         j_max = problem.j_max or cfg.j_max
+        sub = self.subproblem
+        inputs = None
         for _ in range(j_max):
-            sub = self.subproblem
-            inputs = sub.inputs(
-                iterate,
-                x0,
-                h_ref,
-                pose_ref,
-                pf_ref,
-                r.p_com_ref,
-                dts,
-                contact,
-                problem.foot_yaw_rad,
-                boxes or None,
-                p_measured,
-            )
+            if inputs is None:
+                inputs = sub.inputs(
+                    iterate, x0, h_ref, pose_ref, pf_ref, r.p_com_ref, dts, contact,
+                    problem.foot_yaw_rad, boxes or None, p_measured,
+                )  # fmt: skip
+            else:  # the same state, contacts and boxes: only the references and dts move
+                inputs = inputs.with_references(h_ref, pose_ref, pf_ref, r.p_com_ref, dts)
             step = sub.solve(iterate, inputs)
             n_qps += 1
             iterate = iterate.apply(step, 1.0)
@@ -446,7 +441,11 @@ class SequentialKDMPC:
             solve_time_s=time.perf_counter() - t0,
             last_step=step,
             step_dt_s=dt,
-            cost=math.nan if step is None else sub.plan_cost(iterate, step.states, inputs),
+            cost=(
+                math.nan
+                if step is None or inputs is None
+                else sub.plan_cost(iterate, step.states, inputs)
+            ),
         )
 
 
