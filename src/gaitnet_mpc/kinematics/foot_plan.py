@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.gait.swing import min_jerk, swing_profile
 from gaitnet_mpc.gait.timing import ReferenceTiming
-from gaitnet_mpc.geometry import heading_axes, rotate2, wrap_angle
+from gaitnet_mpc.geometry import heading_axes, rotate2
+from gaitnet_mpc.kinematics.foot_plan_kernel import foothold_means, plan_rows
 from gaitnet_mpc.robots.spec import FEET
 
 __all__ = [
@@ -177,21 +177,14 @@ def foot_plan(
     apex_height_m: float,
     planar: bool,
 ) -> FootPlan:
-    """Foot positions (h+1, 2, 3) and headings (h+1, 2) from the timeline (both feet in
-    one vectorised :func:`gaitnet_mpc.gait.swing.swing_profile` call; swing apex
+    """Foot positions (h+1, 2, 3) and headings (h+1, 2) from the timeline (the swing
+    profile of :func:`gaitnet_mpc.gait.swing.swing_profile` for both feet, compiled:
+    :func:`~gaitnet_mpc.kinematics.foot_plan_kernel.plan_rows`; swing apex
     ``apex_height_m`` [m]; ``planar``: zero headings, biped2d)."""
     stacked, j0, j1 = stacked_index(index, footholds)  # (n_fh, 3), (h+1, 2) x2
-    n = index.shape[0]
-    p_foot = swing_profile(stacked[j0.ravel()], stacked[j1.ravel()], phase.ravel(), apex_height_m)
-    if planar:
-        yaw = np.zeros((n, _N_FEET))
-    else:
-        yaws = np.concatenate([foothold_yaw[f] for f in FEET])
-        y0 = yaws[j0]
-        yaw = y0 + wrap_angle(yaws[j1] - y0) * min_jerk(phase)
-    return FootPlan(
-        p_foot.reshape(n, _N_FEET, 3), yaw, footholds, foothold_yaw, index, phase, time_in_swing_s
-    )
+    yaws = np.zeros(stacked.shape[0]) if planar else np.concatenate([foothold_yaw[f] for f in FEET])
+    p_foot, yaw = plan_rows(stacked, yaws, j0, j1, phase, apex_height_m, planar)
+    return FootPlan(p_foot, yaw, footholds, foothold_yaw, index, phase, time_in_swing_s)
 
 
 def footholds_from_iterates(
@@ -229,13 +222,8 @@ def footholds_from_iterates(
             "p_foot_iter_m", p_iter_m.shape, f"({h + 1}, 2, 3) or ({h}, 2, 3) foot iterates [m]"
         )
     stacked, j0, _ = stacked_index(index[:rows], footholds)
-    j = (j0 + (phase[:rows] == 1.0))[on_ground]  # (n_on,) stacked foothold rows
-    n_fh = stacked.shape[0]
-    counts = np.bincount(j, minlength=n_fh)  # (n_fh,)
-    onehot = np.zeros((j.size, n_fh))
-    onehot[np.arange(j.size), j] = 1.0
-    sums = onehot.T @ p_iter_m[on_ground]  # (n_fh, 3)
-    new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], stacked)
+    j = j0 + (phase[:rows] == 1.0)  # (rows, 2) stacked foothold rows
+    new = foothold_means(p_iter_m, on_ground, j, stacked)
     if planar:
         new[:, 1] = stacked[:, 1]
     out: dict[str, np.ndarray] = {}
