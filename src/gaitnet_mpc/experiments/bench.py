@@ -18,7 +18,8 @@ its minimum over the rounds. Per case it reports:
 * the physical outcome (fell, distance), so that a faster case is not a worse walker.
 
 :func:`profile_parts` runs one more episode under :mod:`cProfile` and splits the solve time
-into the QP backend, QP assembly, the reference updates (f_IK, f_ref) and IK.
+into the condensed QP (condensing and DAQP), the reference updates (f_IK, f_ref) and
+the trunk IK.
 :func:`memory_episode` walks one long episode and reads the resident set size (RSS) at
 the start and the end. :func:`perf_markdown` writes it all as ``perf.md``.
 """
@@ -351,16 +352,19 @@ def run_bench(
 #: Profile rows: label -> (file name, function name pattern[, caller's file name]) of the
 #: profiled function; with a caller, only the time of calls made from that file counts.
 PARTS: dict[str, tuple[str, ...]] = {
-    "QP layer (QPWorkspace.solve: PIQP setup/update + solve)": ("workspace.py", "solve"),
-    "  of which PIQP's own solve()": ("~", "<built-in method piqp.*.solve>"),
-    "QP assembly (KDSubproblem.build)": ("implicit_kd.py", "build"),
+    "condensed QP (KDSubproblem._solve_condensed: kernels + DAQP)": (
+        "implicit_kd.py",
+        "_solve_condensed",
+    ),
+    "  of which the condensing (KDSubproblem.condensed_qp)": ("implicit_kd.py", "condensed_qp"),
+    "  of which DAQP and the expansion (KDCondensed.solve)": ("kd_condensed.py", "solve"),
+    "sparse QP fallback (QPWorkspace.solve: PIQP)": ("workspace.py", "solve"),
     "QP input checks (KDSubproblem.inputs)": ("implicit_kd.py", "inputs"),
     "f_IK update_reference": ("reference.py", "update_reference"),
     "f_ref make_reference": ("reference.py", "make_reference"),
-    "  in f_IK + f_ref: whole_body_ik (kinematics/leg_ik.py)": (
-        "leg_ik.py",
-        "whole_body_ik",
-        "reference.py",
+    "  in f_IK + f_ref: trunk IK configurations (ReferenceWorkspace)": (
+        "reference_workspace.py",
+        "trunk_configurations",
     ),
     "dt policy (Gait-Net forward pass and features)": ("policy.py", "__call__"),
 }

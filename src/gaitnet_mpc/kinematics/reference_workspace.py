@@ -15,6 +15,7 @@ import pinocchio as pin
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.timing import ReferenceTiming
+from gaitnet_mpc.kinematics.foot_plan_kernel import foothold_means, plan_rows
 from gaitnet_mpc.kinematics.leg_ik import (
     LegGeometry,
     PlanarLegGeometry,
@@ -124,6 +125,13 @@ class ReferenceWorkspace:
         }
         #: (3,) diag(d c / d p_B), feet fixed; (2, 3) diag(d c / d p_f) per foot
         self.com_gain, self.com_gain_feet = self._measure_com_gains(p_base, p_feet)
+        # load the foot plan's compiled kernels now (numba's cache: 10-100 ms on a
+        # process's first call), not in the first f_ref of a control loop
+        rows = np.zeros((1, _N_FEET), dtype=np.int64)
+        plan_rows(np.zeros((1, 3)), np.zeros(1), rows, rows, np.zeros((1, _N_FEET)), 0.1, False)
+        foothold_means(
+            np.zeros((1, _N_FEET, 3)), np.ones((1, _N_FEET), bool), rows, np.zeros((1, 3))
+        )
 
     def _measure_com_gains(
         self, p_base: np.ndarray, p_feet: dict[str, np.ndarray]

@@ -161,8 +161,29 @@ class KDSubproblem:
         self.condensed: KDCondensed | None = None
         if c.qp_form == "condensed":
             self.condensed = KDCondensed(c)
+            self._load_kernels()
         #: Condensed solves that failed and were repeated on the sparse QP.
         self.n_fallbacks = 0
+
+    def _load_kernels(self) -> None:
+        """Solve one QP of a robot standing still through the condensed form, so that
+        its compiled kernels are loaded (from numba's cache: 10-100 ms on a process's
+        first call) before a control loop runs, not in its first solve."""
+        h, mass = self.horizon, self.config.mass_kg
+        contact = np.ones((h, N_FEET), dtype=bool)
+        p_com = np.tile([0.0, 0.0, 0.5], (h + 1, 1))
+        p_foot = np.zeros((h, N_FEET, 3))
+        p_foot[:, :, 1] = [0.1, -0.1]
+        it = KDIterate.initial(p_com[0], p_com, p_foot, contact, mass)
+        x0 = np.zeros(NX)
+        x0[:3] = mass * p_com[0]
+        pose = np.zeros((h + 1, 6))
+        pose[:, :3] = mass * p_com
+        inputs = self.inputs(
+            it, x0, np.zeros((h + 1, 6)), pose, p_foot, p_com, np.full(h, 0.05), contact,
+            np.zeros((h, N_FEET)),
+        )  # fmt: skip
+        self._solve_condensed(it, inputs)
 
     # ------------------------------------------------------------------ layout
     @property
