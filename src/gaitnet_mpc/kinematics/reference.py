@@ -76,9 +76,11 @@ Cost
 Create one :class:`ReferenceWorkspace` per robot and controller and pass it to
 :func:`make_reference` (reading the leg geometry and measuring the CoM gain costs
 milliseconds); the returned reference keeps it, so :func:`update_reference` reuses its
-Pinocchio data and geometry. Everything is vectorised over the ``h + 1`` stages; the only
-Python loops run over the two feet, their few stance/swing segments and the Pinocchio
-calls per stage (CoM, momentum). See ``benchmarks/results/reference.md``.
+Pinocchio data and geometry. Everything is vectorised over the ``h + 1`` stages or runs
+in compiled row loops (the leg IK, the foot plan, and the CoM and momentum of the
+humanoid's tree: :mod:`~gaitnet_mpc.kinematics.rigid_body_kernel`); the only Python loops
+run over the two feet and their few stance/swing segments. See
+``benchmarks/results/reference.md``.
 """
 
 from __future__ import annotations
@@ -182,11 +184,7 @@ def _build(
         yaw_dot = d_mat @ yaw_rad  # (h+1,), yaw_rad is continuous (not wrapped)
         v[:, 0:3] = np.einsum("kji,kj->ki", rot, p_dot)
         v[:, 3:6] = rot[:, 2, :] * yaw_dot[:, None]  # R^T e_z = third row of R
-    h_ref = np.empty((n, 6))
-    p_com = np.empty((n, 3))
-    for k in range(n):  # eq. 11, h = A_G(q) v; the same pass computes the CoM
-        h_ref[k] = pin.computeCentroidalMomentum(model, data, q[k], v[k]).vector
-        p_com[k] = data.com[0]
+    h_ref, p_com = ws.momentum(q, v)  # eq. 11, h = A_G(q) v; the same pass gives the CoM
     dts = np.append(timing.dts_s, 0.0)  # (h+1,), the last entry is unused
     pose0 = np.concatenate([ws.mass_kg * p_com[0], pose0_angular_kgm2])
     if ws.config.pose_method == "eq30":

@@ -23,6 +23,7 @@ from gaitnet_mpc.kinematics.leg_ik import (
     whole_body_ik,
 )
 from gaitnet_mpc.kinematics.leg_ik_kernel import leg_ik_rows
+from gaitnet_mpc.kinematics.rigid_body_kernel import KinematicTree, tree_of
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
@@ -101,6 +102,8 @@ class ReferenceWorkspace:
         self.mass_kg = float(pin.computeTotalMass(self.model))
         self.planar = bool(robot.spec.planar)
         self.contact_radius_m = float(robot.spec.foot_contact_radius_m)
+        #: the model as arrays for the compiled CoM and momentum, None: Pinocchio's
+        self.tree: KinematicTree | None = tree_of(self.model)
         self._nominal_joints = robot.nominal_joint_pos()
         self._leg_columns = [robot.n_root_q + np.asarray(robot.leg_joint_index[f]) for f in FEET]
 
@@ -125,8 +128,9 @@ class ReferenceWorkspace:
         }
         #: (3,) diag(d c / d p_B), feet fixed; (2, 3) diag(d c / d p_f) per foot
         self.com_gain, self.com_gain_feet = self._measure_com_gains(p_base, p_feet)
-        # load the foot plan's compiled kernels now (numba's cache: 10-100 ms on a
-        # process's first call), not in the first f_ref of a control loop
+        # load the compiled kernels now (numba's cache: 10-100 ms on a process's first
+        # call), not in the first f_ref of a control loop (the CoM gains loaded the IK's)
+        self.momentum(q_nom[None, :], np.zeros((1, self.model.nv)))
         rows = np.zeros((1, _N_FEET), dtype=np.int64)
         plan_rows(np.zeros((1, 3)), np.zeros(1), rows, rows, np.zeros((1, _N_FEET)), 0.1, False)
         foothold_means(
@@ -208,8 +212,22 @@ class ReferenceWorkspace:
         q[:, 3], q[:, 4], q[:, 5], q[:, 6] = -sz * st, cz * st, sz * ct, cz * ct
         return q, reachable
 
+    def momentum(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 6) centroidal momentum ``A_G(q) v`` (eq. 11) and (N, 3) CoM [m] of
+        configurations ``q`` (N, nq) with velocities ``v`` (N, nv)."""
+        if self.tree is not None:
+            return self.tree.momentum(q, v)
+        h = np.empty((q.shape[0], 6))
+        com = np.empty((q.shape[0], 3))
+        for k in range(q.shape[0]):
+            h[k] = pin.computeCentroidalMomentum(self.model, self.data, q[k], v[k]).vector
+            com[k] = self.data.com[0]
+        return h, com
+
     def _com(self, q: np.ndarray) -> np.ndarray:
         """(N, 3) CoM of configurations q (N, nq) [m]."""
+        if self.tree is not None:
+            return self.tree.com(q)
         out = np.empty((q.shape[0], 3))
         for k in range(q.shape[0]):
             out[k] = pin.centerOfMass(self.model, self.data, q[k], False)
