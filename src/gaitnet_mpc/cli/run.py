@@ -306,7 +306,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
 
 def main(args: argparse.Namespace) -> int:
     from gaitnet_mpc.cli.viewer import check_viewer
-    from gaitnet_mpc.results.outdir import claim_output_folder
+    from gaitnet_mpc.results.outdir import check_output_path, claim_output_folder
     from gaitnet_mpc.results.rundir import RUN_ARTIFACTS
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.scenario import build_episode
@@ -314,6 +314,8 @@ def main(args: argparse.Namespace) -> int:
 
     if args.viewer:
         check_viewer()
+    if args.out is not None:  # a path that cannot be written, before the episode is built
+        check_output_path(args.out, "--out")
     scenario = scenario_from_args(args)
     robot = load_robot(scenario.robot)
     check_payload(scenario.payload_kg, robot.total_mass_kg, "--payload-kg")
