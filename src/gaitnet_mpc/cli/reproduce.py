@@ -70,7 +70,8 @@ def add_parser(sub: Any) -> None:
         "--gaitnet-weights",
         default=None,
         metavar="NAME|PATH",
-        help="fig6: Gait-Net's weights, a shipped name or a .npz (default: the robot's)",
+        help="fig6: Gait-Net's weights, a shipped name, a `gaitnet-mpc train --out DIR` "
+        "folder or its DIR/gaitnet.npz (default: the robot's)",
     )
     rep.add_argument(
         "--workers",

@@ -28,6 +28,7 @@ from typing import Any
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.data import load_dataset
 from gaitnet_mpc.gaitnet.fit import FEATURE_SETS, FitReport, fit, write_fit
+from gaitnet_mpc.gaitnet.model import WEIGHTS_FILE
 from gaitnet_mpc.gaitnet.train import MemberFit, TrainConfig
 from gaitnet_mpc.results.io import write_json_atomic
 from gaitnet_mpc.results.outdir import (
@@ -38,7 +39,7 @@ from gaitnet_mpc.results.outdir import (
 )
 
 #: Files of a model folder (what ``overwrite`` may replace).
-MODEL_FILES = ("gaitnet.npz", "report.json", "loss.csv", "loss.png", "fig4.png")
+MODEL_FILES = (WEIGHTS_FILE, "report.json", "loss.csv", "loss.png", "fig4.png")
 RESUME = "resume.json"
 
 
