@@ -244,3 +244,173 @@ def test_an_out_under_a_file_is_refused_by_every_command(
     err = capsys.readouterr().err
     assert "Traceback" not in err and "--out" in err and f"({file} is a file)" in err
     assert file.read_text() == "x"
+
+
+# ----------------------------------------------------------------------------- messages
+def _weights_run(tmp_path: Path, weights: Path | str) -> int:
+    argv = ["--robot", "biped2d", "--controller", "gaitnet", "--gaitnet-weights", str(weights)]
+    return _stand(tmp_path / "gaitnet-run", *argv)
+
+
+def test_gaitnet_weights_accept_the_model_folder_train_writes(tmp_path: Path) -> None:
+    """``--gaitnet-weights DIR`` with DIR the ``--out`` of ``train`` (its gaitnet.npz)."""
+    from gaitnet_mpc.control.dt_policies import weights_path
+    from gaitnet_mpc.gaitnet import WEIGHTS_DIR, WEIGHTS_FILE
+    from gaitnet_mpc.gaitnet.training_run import MODEL_FILES
+    from gaitnet_mpc.robots import load_robot
+
+    assert WEIGHTS_FILE in MODEL_FILES  # the layout train writes
+    model = tmp_path / "model"
+    model.mkdir()
+    shutil.copy(WEIGHTS_DIR / "biped2d.npz", model / WEIGHTS_FILE)
+    (model / "report.json").write_text("{}")
+    assert weights_path(load_robot("biped2d"), str(model)) == model / WEIGHTS_FILE
+    assert _weights_run(tmp_path, model) == 0
+
+
+def test_a_folder_without_weights_names_what_is_missing(
+    runs: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    for folder, held in ((empty, "it is empty"), (runs["RUN"], "it holds course.json")):
+        assert _weights_run(tmp_path, folder) == 2
+        err = capsys.readouterr().err
+        assert f"--gaitnet-weights: got '{folder}'" in err and "with gaitnet.npz in it" in err
+        assert held in err and "Traceback" not in err
+
+
+def test_a_text_file_as_weights_is_not_a_weights_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = tmp_path / "weights.npz"
+    text.write_text("these are not weights\n")
+    assert _weights_run(tmp_path, text) == 2
+    err = capsys.readouterr().err
+    assert f"--gaitnet-weights: got '{text}', expected a Gait-Net weights .npz" in err
+    assert "(this is a text file)" in err and "allow_pickle" not in err
+
+
+@pytest.mark.parametrize("command", ["plot", "compare"])
+def test_a_truncated_or_malformed_log_is_named(
+    command: str, runs: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "run"
+    shutil.copytree(runs["RUN"], run)
+    log = run / "log.csv"
+    lines = log.read_text().splitlines()
+    n = len(lines)
+    not_a_number = "x" + lines[2][lines[2].index(",") :]  # t_s of line 3
+    cases = (
+        ([*lines[:-1], lines[-1][:12]], f"on its last line {n}", "the file is truncated"),
+        ([*lines[:3], lines[3] + ",1", *lines[4:]], "fields on line 4", "the file is malformed"),
+        ([*lines[:2], not_a_number, *lines[3:]], "line 3, t_s: got 'x'", "expected a number"),
+    )
+    for text, where, what in cases:
+        log.write_text("\n".join(text) + "\n")
+        argv = [command, str(run)] + (
+            [str(runs["RUN"]), "--out", str(tmp_path / "c")] * (command == "compare")
+        )
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert f"{log}" in err and where in err and what in err, err
+        assert "usecols" not in err and "Traceback" not in err
+
+
+def test_a_course_or_scenario_file_with_a_byte_order_mark_is_read(
+    runs: dict[str, Path], tmp_path: Path
+) -> None:
+    """UTF-8 with a byte-order mark (some Windows editors write one) is UTF-8."""
+    course = tmp_path / "course.json"
+    course.write_bytes(b"\xef\xbb\xbf" + (runs["RUN"] / "course.json").read_bytes())
+    assert _stand(tmp_path / "a", "--course", str(course)) == 0
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_bytes(b"\xef\xbb\xbf" + (runs["RUN"] / "scenario.toml").read_bytes())
+    argv = ["run", "--scenario", str(scenario), "--no-video", "--no-plots", "--no-progress"]
+    assert main([*argv, "--out", str(tmp_path / "b")]) == 0
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--course", "gap", "--seed", "-1"], "--seed: got -1, expected an integer >= 0"),
+        (["--push", "t=-1,fx=10,dur=0.1"], "--push t: got -1.0, expected a finite time >= 0 s"),
+        (["--push", "t=1,dur=9"], "--push dur: got 9.0"),
+        (["--push", "t=1,fx=800,fy=800,dur=0.1"], "--push fx,fy,fz: got (800.0, 800.0, 0.0)"),
+        (["--cart-load-kg", "-1"], "--cart-load-kg: got -1.0"),
+    ],
+)
+def test_errors_name_the_option_that_was_given(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert _stand(tmp_path / "r", *args) == 2
+    err = capsys.readouterr().err
+    assert message in err and "course_seed" not in err and "push." not in err, err
+    assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        ({"command": {"vx_mps": float("nan")}}, "command.vx_mps: got nan, expected a finite"),
+        ({"command": {"yaw_rate_radps": 9.0}}, "command.yaw_rate_radps: got 9.0"),
+        (
+            {"pushes": [{"t_s": -1.0, "force_world_n": [1.0, 0.0, 0.0], "duration_s": 0.1}]},
+            "pushes[0].t_s: got -1.0",
+        ),
+        (
+            {"pushes": [{"t_s": 0.1, "force_world_n": [900.0, 0.0, 0.0], "duration_s": 1.0}]},
+            "pushes[0].force_world_n x duration_s: got '900 N s",
+        ),
+    ],
+)
+def test_a_scenario_file_error_names_the_files_key(
+    edit: dict[str, object],
+    message: str,
+    runs: dict[str, Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import tomllib
+
+    import tomli_w
+
+    table = tomllib.loads((runs["RUN"] / "scenario.toml").read_text())
+    for key, value in edit.items():
+        table[key] = {**table[key], **value} if isinstance(value, dict) else value
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(tomli_w.dumps(table))
+    argv = ["run", "--scenario", str(scenario), "--no-video", "--out", str(tmp_path / "r")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{scenario}: {message}" in err, err
+    assert "--vx" not in err and "--yaw-rate" not in err and "--push" not in err
+
+
+def test_an_unknown_option_is_the_subcommands_error(capsys: pytest.CaptureFixture[str]) -> None:
+    for argv, usage, error in (
+        (["run", "--bogus"], "usage: gaitnet-mpc run ", "gaitnet-mpc run: error: "),
+        (["compare", "a", "--bogus", "1"], "usage: gaitnet-mpc compare ", "compare: error: "),
+        (["--bogus", "run"], "usage: gaitnet-mpc [-h]", "gaitnet-mpc: error: "),
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert usage in err and f"{error}unrecognized arguments: --bogus" in err, err
+
+
+def test_compare_refuses_a_run_compared_with_itself(
+    runs: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = runs["RUN"]
+    link = tmp_path / "link"
+    link.symlink_to(run)
+    for pair, why in (((run, run), "it is given twice"), ((run, link), f"same folder as {run}")):
+        argv = ["compare", *(str(p) for p in pair), "--out", str(tmp_path / "c")]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "RUN_DIR: got" in err and "a different run folder each time" in err
+        assert why in err
+    assert not (tmp_path / "c").exists()
+    assert main(["compare", str(run), str(runs["RUN2"]), "--out", str(tmp_path / "c")]) == 0
