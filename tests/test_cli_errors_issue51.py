@@ -414,3 +414,86 @@ def test_compare_refuses_a_run_compared_with_itself(
         assert why in err
     assert not (tmp_path / "c").exists()
     assert main(["compare", str(run), str(runs["RUN2"]), "--out", str(tmp_path / "c")]) == 0
+
+
+# ----------------------------------------------------------------------------- no effect
+@pytest.fixture
+def fake_reproduce(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The reproductions replaced by a one-line report; yields the targets run."""
+    from gaitnet_mpc.experiments import reproduce
+
+    ran: list[str] = []
+
+    def report(out: Path, name: str) -> Path:
+        ran.append(name)
+        out.mkdir(parents=True, exist_ok=True)  # fig6 makes its own folder
+        (out / f"{name}.md").write_text(f"# {name}\n")
+        return out / f"{name}.md"
+
+    monkeypatch.setattr(reproduce, "figure", lambda out, name, **kw: report(out, name))
+    monkeypatch.setattr(reproduce, "table2", lambda out, n, **kw: report(out, "table2"))
+    monkeypatch.setattr(reproduce, "table1", lambda data, out: report(out, "table1"))
+    monkeypatch.setattr(reproduce, "fig6", lambda out, **kw: report(out, "fig6"))
+    return ran
+
+
+def test_reproduce_warns_about_options_its_target_does_not_use(
+    fake_reproduce: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["reproduce", "fig7", "--seeds", "5", "--problems", "3", "--quick", "--no-video"]
+    assert main([*argv, "--out", str(tmp_path / "fig7")]) == 0
+    assert fake_reproduce == ["fig7"]
+    warnings = [w for w in capsys.readouterr().err.splitlines() if "warning:" in w]
+    assert warnings == [
+        "gaitnet-mpc: warning: --problems 3 has no effect: reproduce fig7 does not use it "
+        "(it is for table2)",
+        "gaitnet-mpc: warning: --seeds 5 has no effect: reproduce fig7 does not use it "
+        "(it is for fig6)",
+        "gaitnet-mpc: warning: --no-video has no effect with --quick (quick runs make no video)",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["table2", "--problems", "3", "--no-joint-space"], []),
+        (["table1", "--overwrite", "--workers", "2"], ["--workers 2 has no effect"]),
+        (["table2", "--overwrite"], ["--overwrite has no effect: reproduce table2 resumes"]),
+        (["fig6", "--quick", "--address", "x:1"], ["--address x:1 has no effect without"]),
+        (["fig6", "--quick", "--no-video", "--data", "d"], ["--data d", "--no-video has no"]),
+        (["all", "--quick", "--first-seed", "3"], ["--first-seed 3 has no effect"]),
+    ],
+)
+def test_reproduce_warns_only_about_unused_options(argv: list[str], expected: list[str]) -> None:
+    from gaitnet_mpc.cli.main import parse_args
+    from gaitnet_mpc.cli.reproduce import unused_options
+
+    warnings = unused_options(parse_args(["reproduce", *argv]))
+    assert len(warnings) == len(expected), warnings
+    for text, start in zip(warnings, expected, strict=True):
+        assert text.startswith(start), warnings
+
+
+def test_reproduce_fills_in_the_defaults_of_options_not_given(
+    fake_reproduce: list[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from gaitnet_mpc.cli import reproduce as cli
+    from gaitnet_mpc.experiments import reproduce
+
+    seen: dict[str, object] = {}
+
+    def fig6(out: Path, **kwargs: object) -> Path:
+        seen.update(kwargs)
+        out.mkdir(parents=True)
+        (out / "fig6.md").write_text("# fig6\n")
+        return out / "fig6.md"
+
+    monkeypatch.setattr(reproduce, "fig6", fig6)
+    assert main(["reproduce", "fig6", "--out", str(tmp_path / "f")]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert seen["quick"] is False and seen["seeds"] is None and seen["first_seed"] == 0
+    assert seen["workers"] == cli.DEFAULTS["workers"] and seen["backend"] == "process"
+    assert seen["progress"] is True and seen["gaitnet_weights"] is None
