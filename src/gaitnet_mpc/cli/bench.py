@@ -88,6 +88,9 @@ def main(args: argparse.Namespace) -> int:
         memory_case = cases[labels.index(args.memory_case)]
     for case in cases:  # bad controller names or overrides fail here, before any timing
         build_case(case, spec)
+    if args.memory_case is not None and args.memory_seconds == 0.0:
+        text = f"--memory-case {args.memory_case} has no effect without --memory-seconds"
+        print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     with claim_output_file(args.out, option="--out", overwrite=args.overwrite, what="bench"):
         return _bench(args, cases, spec, memory_case)
 

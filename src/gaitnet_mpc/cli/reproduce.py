@@ -143,8 +143,6 @@ def unused_options(args: argparse.Namespace) -> list[str]:
         else:
             why = f"reproduce {what} does not use it (it is for {', '.join(users)})"
         out.append(f"{given} has no effect: {why}")
-    if what == "fig6" and args.address is not None and args.backend != "ray":
-        out.append(f"--address {args.address} has no effect without --backend ray")
     if what in USED_BY["no_video"] and args.quick and args.no_video:
         out.append("--no-video has no effect with --quick (quick runs make no video)")
     return out
