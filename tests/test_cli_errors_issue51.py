@@ -350,6 +350,29 @@ def test_errors_name_the_option_that_was_given(
 
 
 @pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["collect", "--seed", "-1"], "--seed: got -1, expected an integer >= 0"),
+        (["collect", "--max-restarts", "-1"], "--max-restarts: got -1"),
+        (["train", "--data", DATA, "--seed", "-1"], "--seed: got -1, expected an integer in"),
+        (["train", "--data", DATA, "--seed", str(10**23)], f"--seed: got {10**23}"),
+    ],
+)
+def test_bad_seeds_of_collect_and_train_are_named_before_any_work(
+    argv: list[str],
+    message: str,
+    tmp_path: Path,
+    no_training: None,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Once NumPy's or PyTorch's ValueError after the folder was made (exit 4)."""
+    assert main([*argv, "--no-progress", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err, err
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
     ("edit", "message"),
     [
         ({"command": {"vx_mps": float("nan")}}, "command.vx_mps: got nan, expected a finite"),
