@@ -100,7 +100,7 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         (["--payload-kg", "17"], "--payload-kg: got 17.0, expected a mass in [0, 16] kg"),
         (["--robot", "biped2d", "--payload-kg", "10.5"], "--payload-kg: got 10.5"),
         (["--push", "t=0.1,fx=1e9,dur=0.1"], "--push fx: got 1000000000.0, expected a force"),
-        (["--push", "t=0.1,fx=500,dur=0.5"], "push.impulse: got '250 N s"),
+        (["--push", "t=0.1,fx=500,dur=0.5"], "--push impulse: got '250 N s"),
         (
             ["--controller", "srbm", "--preview"],
             "--preview: got 'srbm', expected one of kd, gaitnet, oracle",

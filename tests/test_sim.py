@@ -37,13 +37,13 @@ def test_push_parse() -> None:
         ("t=3,fx=50", "--push"),
         ("t=3,fx=abc,dur=1", "--push fx"),
         ("x=1,t=1,dur=1", "--push"),
-        ("t=-1,dur=1", "push.t"),
-        ("t=1,dur=0", "push.dur"),
+        ("t=-1,dur=1", "--push t"),
+        ("t=1,dur=0", "--push dur"),
         ("t=0.1,fx=1e9,dur=0.1", "--push fx"),
         ("t=0.1,fz=-1001,dur=0.1", "--push fz"),
-        ("t=0.1,fx=800,fy=800,dur=0.1", "push.force"),
-        ("t=0.1,fx=100,dur=1.01", "push.impulse"),
-        ("t=0.1,fx=1,dur=6", "push.dur"),
+        ("t=0.1,fx=800,fy=800,dur=0.1", "--push fx,fy,fz"),
+        ("t=0.1,fx=100,dur=1.01", "--push impulse"),
+        ("t=0.1,fx=1,dur=6", "--push dur"),
     ],
 )
 def test_push_parse_errors_name_the_field(text: str, field: str) -> None:

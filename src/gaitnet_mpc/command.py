@@ -12,6 +12,10 @@ from dataclasses import dataclass
 
 from gaitnet_mpc.errors import ConfigError
 
+#: Each field of :class:`Command` and the ``gaitnet-mpc run`` option that sets it (the
+#: name its errors give; a scenario file names its own key instead).
+OPTIONS = {"vx_mps": "--vx", "vy_mps": "--vy", "yaw_rate_radps": "--yaw-rate"}
+
 
 @dataclass(frozen=True)
 class Command:
@@ -23,12 +27,12 @@ class Command:
 
     def __post_init__(self) -> None:
         for name, value, bound in (
-            ("--vx", self.vx_mps, 1.5),
-            ("--vy", self.vy_mps, 0.5),
-            ("--yaw-rate", self.yaw_rate_radps, 1.5),
+            ("vx_mps", self.vx_mps, 1.5),
+            ("vy_mps", self.vy_mps, 0.5),
+            ("yaw_rate_radps", self.yaw_rate_radps, 1.5),
         ):
             if not (math.isfinite(value) and abs(value) <= bound):
-                raise ConfigError(name, value, f"a finite value in [-{bound}, {bound}]")
+                raise ConfigError(OPTIONS[name], value, f"a finite value in [-{bound}, {bound}]")
 
     def to_dict(self) -> dict[str, float]:
         return {"vx_mps": self.vx_mps, "vy_mps": self.vy_mps, "yaw_rate_radps": self.yaw_rate_radps}

@@ -206,14 +206,14 @@ MAX_TOML_BYTES = 1 << 20
 
 
 def read_toml(path: str | Path, field: str = "--config") -> dict[str, Any]:
-    """The tables of a TOML file; :class:`ConfigError` if it is missing, larger than
-    :data:`MAX_TOML_BYTES` (checked before reading) or not TOML."""
+    """The tables of a TOML file (a UTF-8 byte-order mark is skipped); :class:`ConfigError`
+    if it is missing, larger than :data:`MAX_TOML_BYTES` (checked before reading) or not
+    TOML."""
     try:
         size = Path(path).stat().st_size
         if size > MAX_TOML_BYTES:
             raise ConfigError(field, str(path), f"a TOML file of at most {MAX_TOML_BYTES} bytes")
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        return tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
     except OSError as exc:
         raise ConfigError(field, str(path), f"a readable TOML file ({exc.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:

@@ -40,6 +40,7 @@ from typing import Any
 import tomli_w
 
 from gaitnet_mpc import config as configio
+from gaitnet_mpc.command import OPTIONS as COMMAND_OPTIONS
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.control.registry import (
@@ -115,7 +116,7 @@ class Scenario:
             )
         seed = self.course_seed
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-            raise ConfigError("course_seed", seed, "None or an integer >= 0")
+            raise ConfigError("course_seed", seed, "an integer >= 0 (none: the built-in layout)")
         check_payload(self.payload_kg, field="payload_kg")
         if self.cart is not None and not ROBOTS[self.robot].arm_joints:
             raise ConfigError("cart", self.robot, "a robot with arms to push it (humanoid3d)")
@@ -173,7 +174,12 @@ class Scenario:
             path = Path(course)
             course = str(path if path.is_absolute() else base_dir / path)
         seed = data.get("course_seed", configio.NONE)
-        command = Command(**_floats("command", data.get("command", {}), Command().to_dict()))
+        values = _floats("command", data.get("command", {}), Command().to_dict())
+        try:
+            command = Command(**values)
+        except ConfigError as exc:  # named by the file's key, not by run's option
+            keys = {option: f"command.{name}" for name, option in COMMAND_OPTIONS.items()}
+            raise ConfigError(keys.get(exc.field, exc.field), exc.value, exc.expected) from None
         pushes = [
             Push.from_table(raw, f"pushes[{i}]")
             for i, raw in enumerate(_typed("pushes", data.get("pushes", []), list))

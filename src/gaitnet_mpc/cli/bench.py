@@ -73,8 +73,9 @@ def add_parser(sub: Any) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from gaitnet_mpc.experiments.bench import DEFAULT_CASES, EpisodeSpec, build_case, parse_case
-    from gaitnet_mpc.results.outdir import claim_output_file
+    from gaitnet_mpc.results.outdir import check_output_file, claim_output_file
 
+    check_output_file(args.out, "--out", args.overwrite)  # at once: building cases is slow
     cases = [parse_case(c) for c in args.case] if args.case else list(DEFAULT_CASES)
     spec = EpisodeSpec(args.course, args.vx, args.seconds)
     if not (math.isfinite(args.memory_seconds) and args.memory_seconds >= 0.0):
@@ -87,6 +88,9 @@ def main(args: argparse.Namespace) -> int:
         memory_case = cases[labels.index(args.memory_case)]
     for case in cases:  # bad controller names or overrides fail here, before any timing
         build_case(case, spec)
+    if args.memory_case is not None and args.memory_seconds == 0.0:
+        text = f"--memory-case {args.memory_case} has no effect without --memory-seconds"
+        print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     with claim_output_file(args.out, option="--out", overwrite=args.overwrite, what="bench"):
         return _bench(args, cases, spec, memory_case)
 

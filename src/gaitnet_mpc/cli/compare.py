@@ -24,6 +24,7 @@ def main(args: argparse.Namespace) -> int:
     from gaitnet_mpc.results.outdir import claim_output_folder
     from gaitnet_mpc.results.rundir import COMPARE_ARTIFACTS, load_run
 
+    _check_distinct(args.run_dirs)
     runs = [load_run(p) for p in args.run_dirs]  # every input is checked before --out
     with claim_output_folder(
         args.out,
@@ -38,3 +39,17 @@ def main(args: argparse.Namespace) -> int:
     print(result["markdown"].read_text(), end="")
     print(f"results in {out}/")
     return 0
+
+
+def _check_distinct(run_dirs: list[Path]) -> None:
+    """Each run folder once: a run compared with itself is a mistake in the command."""
+    from gaitnet_mpc.errors import ConfigError
+
+    seen: dict[Path, Path] = {}
+    for path in run_dirs:
+        key = path.resolve()
+        if key in seen:
+            first = seen[key]
+            same = "it is given twice" if path == first else f"it is the same folder as {first}"
+            raise ConfigError("RUN_DIR", str(path), f"a different run folder each time ({same})")
+        seen[key] = path

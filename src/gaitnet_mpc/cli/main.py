@@ -58,6 +58,23 @@ def _module(name: str) -> ModuleType:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``gaitnet-mpc`` parser with every sub-command."""
+    return _build()[0]
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """The options of ``argv``. An option the sub-command does not know is its parser's
+    error (its usage line, exit 2), not the top-level parser's."""
+    parser, commands = _build()
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        before = argv[: argv.index(args.cmd)] if args.cmd in argv else []
+        owner = parser if any(u in before for u in unknown) else commands[args.cmd]
+        owner.error(f"unrecognized arguments: {' '.join(unknown)}")
+    return args
+
+
+def _build() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
+    """The ``gaitnet-mpc`` parser and each sub-command's parser by name."""
     from gaitnet_mpc import __version__
 
     modules = {name: _module(name) for name in COMMANDS}
@@ -75,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="cmd", required=True, metavar="SUB-COMMAND")
     for name in COMMANDS:
         modules[name].add_parser(sub)
-    return parser
+    return parser, {name: sub.choices[name] for name in COMMANDS}
 
 
 @contextlib.contextmanager
@@ -107,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         # SIGTERM stops every command as Ctrl-C does, from start-up through its last write
         with stop_signals_as_keyboard_interrupt():
             with _signals_deferred():
-                args = build_parser().parse_args(argv)
+                args = parse_args(argv)
                 command = _module(args.cmd)
                 for name in getattr(command, "PRELOAD", ()):
                     importlib.import_module(name)

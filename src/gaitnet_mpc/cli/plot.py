@@ -16,11 +16,14 @@ def add_parser(sub: Any) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from gaitnet_mpc.results.outdir import folder_lock
+    from gaitnet_mpc.results.outdir import check_writable, folder_lock
     from gaitnet_mpc.results.plots import make_plots
-    from gaitnet_mpc.results.rundir import load_run
+    from gaitnet_mpc.results.rundir import PLOTS_DIR, load_run
 
     load_run(args.run_dir)  # a named error for anything but a readable run folder
+    check_writable(args.run_dir, "RUN_DIR")  # the plots go to RUN_DIR/plots
+    if (args.run_dir / PLOTS_DIR).is_dir():
+        check_writable(args.run_dir / PLOTS_DIR, "RUN_DIR", shown=args.run_dir)
     with folder_lock(args.run_dir, option="RUN_DIR"):  # not while a run writes it
         written = make_plots(args.run_dir)
     for path in written:

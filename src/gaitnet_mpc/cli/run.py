@@ -63,6 +63,15 @@ SCENARIO_DEFAULTS: dict[str, Any] = {
     "seed": None,
 }
 
+#: Fields of a :class:`~gaitnet_mpc.scenario.Scenario` and the option that sets each (the
+#: name an error about the field gives).
+RUN_OPTIONS = {
+    "course_seed": "--seed",
+    "duration_s": "--duration",
+    "payload_kg": "--payload-kg",
+    "cart.load_kg": "--cart-load-kg",
+}
+
 SUMMARY = "simulate one episode and write a run folder"
 
 #: Imported before the command starts, with Ctrl-C held back (cli/main.py).
@@ -146,7 +155,8 @@ def add_parser(sub: Any) -> None:
         "--gaitnet-weights",
         metavar="NAME|PATH",
         help="gaitnet only: Gait-Net weights, a shipped name (e.g. humanoid3d-wbmpc, taught "
-        "by the whole-body NMPC) or a .npz from `gaitnet-mpc train` (default: the robot's)",
+        "by the whole-body NMPC), the folder DIR of `gaitnet-mpc train --out DIR` or its "
+        "DIR/gaitnet.npz (default: the robot's)",
     )
     run.add_argument(
         "--preset",
@@ -259,9 +269,7 @@ def _epilog(controllers: list[str]) -> str:
 def scenario_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~gaitnet_mpc.scenario.Scenario` the options describe (``--scenario``:
     the file's, and then no other scenario option may be given)."""
-    from gaitnet_mpc.scenario import MAX_DURATION_S, MIN_DURATION_S, Scenario, make_scenario
-    from gaitnet_mpc.sim.cart import Cart
-    from gaitnet_mpc.sim.disturbances import Push
+    from gaitnet_mpc.scenario import MAX_DURATION_S, MIN_DURATION_S, Scenario
     from gaitnet_mpc.sim.simulator import check_payload
 
     given = {k: getattr(args, k) for k in SCENARIO_DEFAULTS if getattr(args, k) is not None}
@@ -283,6 +291,21 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
         lo, hi = DT_RANGE_S
         if not (lo <= v["dt"] <= hi):
             raise ConfigError("--dt", v["dt"], f"a sampling time in [{lo:g}, {hi:g}] s")
+    try:
+        return _make_scenario(v)
+    except ConfigError as exc:  # a scenario's field, named by the option that sets it
+        option = RUN_OPTIONS.get(exc.field)
+        if option is None:
+            raise
+        raise type(exc)(option, exc.value, exc.expected) from None
+
+
+def _make_scenario(v: dict[str, Any]) -> Any:
+    """:func:`~gaitnet_mpc.scenario.make_scenario` of the options ``v``."""
+    from gaitnet_mpc.scenario import make_scenario
+    from gaitnet_mpc.sim.cart import Cart
+    from gaitnet_mpc.sim.disturbances import Push
+
     return make_scenario(
         robot=v["robot"],
         controller=v["controller"],
@@ -306,7 +329,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
 
 def main(args: argparse.Namespace) -> int:
     from gaitnet_mpc.cli.viewer import check_viewer
-    from gaitnet_mpc.results.outdir import claim_output_folder
+    from gaitnet_mpc.results.outdir import check_output_path, claim_output_folder
     from gaitnet_mpc.results.rundir import RUN_ARTIFACTS
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.scenario import build_episode
@@ -314,9 +337,12 @@ def main(args: argparse.Namespace) -> int:
 
     if args.viewer:
         check_viewer()
+    if args.out is not None:  # a path that cannot be written, before the episode is built
+        check_output_path(args.out, "--out")
     scenario = scenario_from_args(args)
     robot = load_robot(scenario.robot)
-    check_payload(scenario.payload_kg, robot.total_mass_kg, "--payload-kg")
+    field = "--payload-kg" if args.scenario is None else f"{args.scenario}: payload_kg"
+    check_payload(scenario.payload_kg, robot.total_mass_kg, field)
     episode = build_episode(scenario, robot=robot)  # every error before the folder is touched
     with claim_output_folder(
         args.out,

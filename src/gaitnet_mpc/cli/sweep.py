@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -43,8 +44,8 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--seeds",
         type=int,
-        default=DEFAULT_SEEDS,
-        help="seeds of protocol and terrain (default: %(default)s)",
+        default=None,  # None: not given (warned about where it has no effect)
+        help=f"seeds of protocol and terrain (default: {DEFAULT_SEEDS}; --quick: 1)",
     )
     s.add_argument(
         "--workers",
@@ -79,6 +80,7 @@ def main(args: argparse.Namespace) -> int:
 
     from gaitnet_mpc.experiments.sweep import (
         DEFAULT_CONTROLLERS,
+        DEFAULT_SEEDS,
         QUICK_CONTROLLER,
         Options,
         SweepSettings,
@@ -99,15 +101,29 @@ def main(args: argparse.Namespace) -> int:
         args.mode,
         controllers,
         args.quick,
-        args.seeds,
+        DEFAULT_SEEDS if args.seeds is None else args.seeds,
         speeds_mps=_numbers(args.speeds, "--speeds"),
         directions=None if args.directions is None else _names(args.directions),
         phases=_numbers(args.phases, "--phases"),
     )
+    for text in unused_options(args):
+        print(f"gaitnet-mpc: warning: {text}", file=sys.stderr)
     command_line = shlex.join(["gaitnet-mpc", *args.argv])
     records = sweep(settings, args.out, options, command_line)
     print(f"{args.out}: {len(records)} case(s); see {args.out / 'sweep.md'}")
     return 0
+
+
+def unused_options(args: argparse.Namespace) -> list[str]:
+    """A warning for each option given that has no effect (as ``run`` warns)."""
+    out = []
+    if args.seeds is not None:
+        if args.mode in ("push", "payload"):
+            why = f"sweep {args.mode} has no seeds (protocol and terrain do)"
+            out.append(f"--seeds {args.seeds} has no effect: {why}")
+        elif args.quick:
+            out.append(f"--seeds {args.seeds} has no effect with --quick (one seed)")
+    return out  # --address without --backend ray: a named error (Options)
 
 
 def _names(text: str) -> tuple[str, ...]:

@@ -11,7 +11,7 @@ from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP
 from gaitnet_mpc.dt_policy import NOMINAL_DT_S, DtPolicyConfig, oracle_grid_s
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.step_durations import StepDurations
-from gaitnet_mpc.gaitnet import WEIGHTS_DIR, GaitNet, default_weights_path
+from gaitnet_mpc.gaitnet import WEIGHTS_DIR, WEIGHTS_FILE, GaitNet, default_weights_path
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.mpc.dt_nlp import NLPDt, NLPDtConfig
 from gaitnet_mpc.mpc.dt_oracle import OracleConfig, OracleDt
@@ -31,25 +31,52 @@ def shipped_weights() -> list[str]:
 
 
 def weights_path(robot: RobotModel, weights: str | Path | None) -> Path:
-    """The file of ``weights``: a shipped name, a path, or None for the robot's default."""
+    """The file of ``weights``: a shipped name, a weights file, a model folder of
+    ``gaitnet-mpc train --out DIR`` (its :data:`WEIGHTS_FILE`), or None for the robot's
+    default.
+
+    Raises:
+        ConfigError: a folder without :data:`WEIGHTS_FILE` (naming what it holds).
+    """
     if weights is None:
         return default_weights_path(robot.name)
     if str(weights) in shipped_weights():
         return WEIGHTS_DIR / f"{weights}.npz"
-    return Path(weights)
+    path = Path(weights)
+    if path.is_dir():
+        if (path / WEIGHTS_FILE).is_file():
+            return path / WEIGHTS_FILE
+        names = sorted(p.name for p in path.iterdir())
+        held = f"it holds {', '.join(names[:4])}{', ...' if len(names) > 4 else ''}"
+        raise ConfigError(
+            "--gaitnet-weights",
+            str(weights),
+            f"a model folder of `gaitnet-mpc train --out DIR`, with {WEIGHTS_FILE} in it "
+            f"({f'{held}, no {WEIGHTS_FILE}' if names else 'it is empty'})",
+        )
+    return path
 
 
 def load_gaitnet(robot: RobotModel, weights: str | Path | None) -> GaitNet:
-    """The network of ``weights`` (see :func:`weights_path`), checked to be ``robot``'s."""
+    """The network of ``weights`` (see :func:`weights_path`), checked to be ``robot``'s;
+    a :class:`ConfigError` names ``--gaitnet-weights``."""
     path = weights_path(robot, weights)
     if not path.is_file():
         raise ConfigError(
             "--gaitnet-weights",
             str(weights if weights is not None else path),
-            f"a shipped name ({', '.join(shipped_weights())}) or a weights file "
-            "(gaitnet-mpc train --out DIR)",
+            f"a shipped name ({', '.join(shipped_weights())}), a weights file or the model "
+            "folder DIR of `gaitnet-mpc train --out DIR`",
         )
-    net = GaitNet.load(path)
+    try:
+        net = GaitNet.load(path)
+    except ConfigError as exc:  # GaitNetWeights.load's, under this option's name
+        if exc.field == "Gait-Net weights":
+            raise ConfigError("--gaitnet-weights", exc.value, exc.expected) from None
+        if exc.field == str(path):  # an entry missing
+            expected = f"{exc.expected} ({exc.value})"
+            raise ConfigError("--gaitnet-weights", str(path), expected) from None
+        raise ConfigError(f"--gaitnet-weights {exc.field}", exc.value, exc.expected) from None
     if net.spec.robot and net.spec.robot != robot.name:
         raise ConfigError("--gaitnet-weights", str(path), f"weights for {robot.name}")
     return net

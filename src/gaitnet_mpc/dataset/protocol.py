@@ -104,7 +104,9 @@ class CollectProtocol:
         if not (0.0 < lo <= hi and math.isfinite(hi)):
             raise ConfigError("duration_range_s", self.duration_range_s, "0 < min <= max [s]")
         if not (isinstance(self.max_restarts, int) and self.max_restarts >= 0):
-            raise ConfigError("max_restarts", self.max_restarts, "an integer >= 0")
+            raise ConfigError("--max-restarts", self.max_restarts, "an integer >= 0")
+        if isinstance(self.seed, bool) or not (isinstance(self.seed, int) and self.seed >= 0):
+            raise ConfigError("--seed", self.seed, "an integer >= 0")  # as NumPy's seeds are
 
     @property
     def seconds_per_set(self) -> float:

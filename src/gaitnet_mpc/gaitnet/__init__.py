@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gaitnet_mpc.gaitnet.model import GaitNet, GaitNetWeights
+from gaitnet_mpc.gaitnet.model import WEIGHTS_FILE, GaitNet, GaitNetWeights
 
 #: Weights shipped with the package, one file per robot.
 WEIGHTS_DIR = Path(__file__).parent / "weights"
@@ -20,4 +20,4 @@ def default_weights_path(robot: str) -> Path:
     return WEIGHTS_DIR / f"{robot}.npz"
 
 
-__all__ = ["WEIGHTS_DIR", "GaitNet", "GaitNetWeights", "default_weights_path"]
+__all__ = ["WEIGHTS_DIR", "WEIGHTS_FILE", "GaitNet", "GaitNetWeights", "default_weights_path"]

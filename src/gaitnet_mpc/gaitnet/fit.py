@@ -20,7 +20,7 @@ from gaitnet_mpc.dataset.schema import FEATURE_NAMES
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.data import GaitData, SetSplit, split_by_set
 from gaitnet_mpc.gaitnet.features import PCASelection, pca_select
-from gaitnet_mpc.gaitnet.model import GaitNet
+from gaitnet_mpc.gaitnet.model import WEIGHTS_FILE, GaitNet
 from gaitnet_mpc.gaitnet.train import MemberFit, TrainConfig, TrainResult, train_ensemble
 
 FEATURE_SETS = ("pca", "full")
@@ -136,7 +136,7 @@ def write_fit(
     from gaitnet_mpc.results.io import write_atomic, write_json_atomic
 
     out.mkdir(parents=True, exist_ok=True)
-    result.weights.save(out / "gaitnet.npz")
+    result.weights.save(out / WEIGHTS_FILE)
     write_json_atomic(out / "report.json", report.to_dict())
     lines = ["member,epoch,train_mse,val_mse"]
     for m, (t, v) in enumerate(zip(result.train_loss, result.val_loss, strict=True)):

@@ -34,6 +34,23 @@ from gaitnet_mpc.errors import ConfigError
 
 FORMAT_VERSION = 1
 ACTIVATIONS = ("tanh",)
+#: The weights file in a model folder of ``gaitnet-mpc train --out DIR``.
+WEIGHTS_FILE = "gaitnet.npz"
+
+
+def _not_npz(path: Path) -> str | None:
+    """None if ``path`` starts as an ``.npz`` (a zip archive) does; else what it is."""
+    with path.open("rb") as fh:
+        head = fh.read(512)
+    if head.startswith((b"PK\x03\x04", b"PK\x05\x06")):
+        return None
+    if head.startswith(b"\x93NUMPY"):
+        return "one .npy array"
+    try:
+        text = b"\0" not in head and bool(head.decode("utf-8", errors="strict").strip())
+    except UnicodeDecodeError:
+        text = False
+    return "a text file" if text else ("an empty file" if not head else "other binary data")
 
 
 @dataclass(frozen=True)
@@ -124,6 +141,10 @@ class GaitNetWeights:
         if not path.is_file():
             raise ConfigError("Gait-Net weights", str(path), "an existing .npz file")
         try:
+            what = _not_npz(path)
+            if what is not None:  # np.load would read it as a pickle and say so
+                expected = f"a Gait-Net weights .npz from `gaitnet-mpc train` (this is {what})"
+                raise ConfigError("Gait-Net weights", str(path), expected)
             f = np.load(path, allow_pickle=False)
             if not isinstance(f, np.lib.npyio.NpzFile):
                 raise ConfigError("Gait-Net weights", str(path), "an .npz archive, not one array")

@@ -67,6 +67,9 @@ class TrainConfig:
                 raise ConfigError(f"--{name}", value, f"an integer in [1, {most}]")
         if not (math.isfinite(self.learning_rate) and self.learning_rate > 0):
             raise ConfigError("learning_rate", self.learning_rate, "a value > 0")
+        seed = self.seed  # member i seeds PyTorch (a 64-bit integer) with seed + i
+        if isinstance(seed, bool) or not (isinstance(seed, int) and 0 <= seed <= 2**31):
+            raise ConfigError("--seed", seed, "an integer in [0, 2^31]")
 
 
 @dataclass

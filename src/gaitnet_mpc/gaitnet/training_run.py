@@ -28,12 +28,18 @@ from typing import Any
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.data import load_dataset
 from gaitnet_mpc.gaitnet.fit import FEATURE_SETS, FitReport, fit, write_fit
+from gaitnet_mpc.gaitnet.model import WEIGHTS_FILE
 from gaitnet_mpc.gaitnet.train import MemberFit, TrainConfig
 from gaitnet_mpc.results.io import write_json_atomic
-from gaitnet_mpc.results.outdir import check_output_path, folder_lock, write_status
+from gaitnet_mpc.results.outdir import (
+    check_output_path,
+    check_writable,
+    folder_lock,
+    write_status,
+)
 
 #: Files of a model folder (what ``overwrite`` may replace).
-MODEL_FILES = ("gaitnet.npz", "report.json", "loss.csv", "loss.png", "fig4.png")
+MODEL_FILES = (WEIGHTS_FILE, "report.json", "loss.csv", "loss.png", "fig4.png")
 RESUME = "resume.json"
 
 
@@ -44,8 +50,12 @@ def staging_folder(out: Path) -> Path:
 
 def check_model_out(out: str | Path, overwrite: bool) -> Path:
     """``out`` as a folder a model may be written to: new, empty, or (``overwrite``) one
-    holding only an earlier model's files."""
+    holding only an earlier model's files; writable, in a writable parent (where the
+    training works, :func:`staging_folder`, and from where the model is renamed into
+    place), all checked before any training."""
     path = check_output_path(out, "--out")
+    if path.is_dir():  # else check_output_path probed the parent already
+        check_writable(path.parent, "--out", shown=path)
     if path.is_dir():
         names = sorted(p.name for p in path.iterdir())
         foreign = [n for n in names if n not in MODEL_FILES]

@@ -5,10 +5,14 @@ work starts, and a status file that says what a long job has done.
   second process that wants the same folder gets a :class:`ConfigError` at once, naming
   the holder. An ``flock`` dies with its process, so a killed command leaves no stale lock;
   the lock file is removed when the block ends.
-* :func:`claim_output_folder` is what ``run``, ``compare``, ``bench``, ``reproduce`` and
-  ``train`` call on ``--out`` before they start: it validates the path, creates the
-  folder, takes its lock, checks that it is new or empty (or, with ``overwrite``, holds only
-  the command's earlier results, which are removed) and that it is writable.
+* :func:`check_output_path` is what every command calls on its output path (``--out``)
+  before any work: a folder path, not a file, that can be made and written
+  (:func:`check_writable`: a probe is made and removed where the results will go), so
+  that a read-only location is a named error (exit 2) and not a crash after the work.
+* :func:`claim_output_folder` is what ``run`` and ``compare`` call on ``--out`` before they
+  start: it checks the path, creates the folder, takes its lock and checks that it is new
+  or empty (or, with ``overwrite``, holds only the command's earlier results, which are
+  removed).
 * :func:`claim_output_file` does the same for a report file (``bench --out``).
 * :func:`write_status` writes ``status.json`` atomically: the command, its state
   (``running``, ``done``, ``interrupted``, ``failed``), the exit code, and the items done
@@ -96,41 +100,94 @@ def new_folder_name(default_prefix: str) -> Path:
 
 
 def check_output_path(path: str | Path, option: str) -> Path:
-    """``path`` as a folder path that could be created: not empty, not ``.``, not a file,
-    no file among its parents. Nothing is created."""
+    """``path`` as a folder path that can be created and written: not empty, not ``.``,
+    not a file, no file among its parents, and writable (:func:`check_writable`). Nothing
+    is left behind (the probe of :func:`check_writable` is removed at once)."""
     if str(path).strip() in ("", "."):  # checked on the string: Path("") is "."
         raise ConfigError(option, str(path), "a folder path for the results (not empty, not '.')")
     path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise ConfigError(option, str(path), "a folder (this path is a file)")
-    for parent in path.parents:
-        if parent.exists() and not parent.is_dir():
-            raise ConfigError(option, str(path), f"a folder path ({parent} is a file)")
+    try:
+        if path.exists() and not path.is_dir():
+            raise ConfigError(option, str(path), "a folder (this path is a file)")
+        if path.is_symlink() and not path.exists():
+            raise ConfigError(option, str(path), "a folder (this path is a broken link)")
+        for parent in path.parents:
+            if parent.exists() and not parent.is_dir():
+                raise ConfigError(option, str(path), f"a folder path ({parent} is a file)")
+    except OSError as exc:  # a parent that may not be searched (EACCES), a name too long
+        raise ConfigError(option, str(path), f"a folder path that can be reached ({exc})") from None
+    check_writable(path, option)
     return path
+
+
+#: The name prefix of the probe :func:`check_writable` makes and removes.
+PROBE_PREFIX = ".gaitnet-mpc-write-test-"
+
+
+def unwritable_reason(folder: str | Path) -> str | None:
+    """None if the folder ``folder`` can be made (where missing) and written; else why not.
+
+    The check is a probe, as the command will write: a file made and removed in
+    ``folder`` when it exists, else a folder made and removed in its nearest existing
+    parent (where ``folder`` would be made). A probe sees what a permission test
+    (``os.access``) misses: a read-only file system, ACLs, a root without the capability
+    to override permissions.
+    """
+    folder = Path(folder)
+    where = folder
+    try:
+        while not where.exists() and where != where.parent:
+            where = where.parent
+        if where == folder:
+            fd, probe = tempfile.mkstemp(prefix=PROBE_PREFIX, dir=where)
+            os.close(fd)
+            os.unlink(probe)
+        else:
+            os.rmdir(tempfile.mkdtemp(prefix=PROBE_PREFIX, dir=where))
+    except OSError as exc:
+        verb = "write in" if where == folder else "create a folder in"
+        return f"cannot {verb} {where}: {exc.strerror or exc}"
+    return None
+
+
+def check_writable(folder: str | Path, option: str, shown: str | Path | None = None) -> None:
+    """Raise a :class:`ConfigError` naming ``option`` and ``shown`` (default: ``folder``)
+    unless the folder ``folder`` can be made and written (:func:`unwritable_reason`)."""
+    reason = unwritable_reason(folder)
+    if reason is not None:
+        got = str(folder if shown is None else shown)
+        raise ConfigError(option, got, f"a writable folder ({reason})")
+
+
+def check_output_file(path: str | Path, option: str, overwrite: bool = False) -> Path:
+    """``path`` as a report file that can be written: not a folder, in a folder that can
+    be made and written, new unless ``overwrite``. Nothing is left behind."""
+    file = Path(path)
+    if str(path).strip() in ("", ".") or file.is_dir():
+        raise ConfigError(option, str(path), "a file path for the report (not a folder)")
+    if file.parent != Path("."):
+        check_output_path(file.parent, option)  # writable too
+    else:
+        check_writable(file.parent, option, shown=path)
+    if file.exists() and not overwrite:
+        raise ConfigError(option, str(path), "a new file; pass --overwrite to replace it")
+    return file
 
 
 @contextlib.contextmanager
 def claim_output_file(
     path: str | Path, *, option: str, overwrite: bool = False, what: str = "command"
 ) -> Iterator[Path]:
-    """A report file to write at the end of a long job, checked before it starts: not a
-    folder, in a folder that can be made and written, new unless ``overwrite``; locked for
-    the block (a lock file ``.<name>.lock`` beside it)."""
-    file = Path(path)
-    if str(path).strip() in ("", ".") or file.is_dir():
-        raise ConfigError(option, str(path), "a file path for the report (not a folder)")
-    if file.parent != Path("."):
-        check_output_path(file.parent, option)
-    if file.exists() and not overwrite:
-        raise ConfigError(option, str(path), "a new file; pass --overwrite to replace it")
+    """A report file to write at the end of a long job, checked before it starts
+    (:func:`check_output_file`); locked for the block (a lock file ``.<name>.lock``
+    beside it)."""
+    file = check_output_file(path, option, overwrite)
     try:
         file.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        expected = f"a file in a folder that can be made ({exc.strerror})"
+        expected = f"a file in a writable folder ({exc.strerror})"
         raise ConfigError(option, str(path), expected) from None
     with folder_lock(file.parent, option=option, name=f".{file.name}.lock", what=what):
-        if not os.access(file.parent, os.W_OK):
-            raise ConfigError(option, str(path), "a file in a writable folder")
         yield file
 
 
@@ -155,19 +212,12 @@ def claim_output_folder(
             process holds the folder.
     """
     folder = check_output_path(new_folder_name(default_prefix) if path is None else path, option)
-    try:
+    try:  # checked writable above; this is for a folder removed or changed since
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ConfigError(
-            option, str(folder), f"a folder that can be made ({exc.strerror})"
-        ) from None
+        raise ConfigError(option, str(folder), f"a writable folder ({exc.strerror})") from None
     with folder_lock(folder, option=option):
         _empty_or_overwrite(folder, option, tuple(artifacts), overwrite)
-        try:
-            probe = tempfile.NamedTemporaryFile(dir=folder, prefix=".write-test-", delete=True)
-            probe.close()
-        except OSError as exc:
-            raise ConfigError(option, str(folder), f"a writable folder ({exc.strerror})") from None
         yield folder
 
 

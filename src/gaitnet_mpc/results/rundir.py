@@ -65,18 +65,42 @@ def read_csv_columns(path: str | Path) -> dict[str, np.ndarray]:
     """Columns of a CSV file with one header line, as ``name -> (n,) float array``.
 
     Missing values (``nan``) stay NaN. A file with only a header gives empty columns.
+
+    Raises:
+        ConfigError: naming the file and the line: not UTF-8 text, a line with another
+            number of fields than the header (a truncated or malformed file), or a value
+            that is not a number.
     """
-    text = Path(path).read_text()
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(str(path), f"byte {exc.start}", "a UTF-8 text CSV file") from None
     lines = text.splitlines()
     if not lines:
         raise ConfigError(str(path), "an empty file", "a CSV file with a header line")
     names = [c.strip() for c in lines[0].split(",")]
     if len(lines) < 2:
         return {n: np.zeros(0) for n in names}
+    for number, line in enumerate(lines[1:], start=2):
+        fields = line.count(",") + 1
+        if fields != len(names):
+            last = number == len(lines)
+            raise ConfigError(
+                str(path),
+                f"{fields} fields on {'its last ' if last else ''}line {number}",
+                f"{len(names)} fields on every line, as in the header: the file is "
+                f"{'truncated (an interrupted write?)' if last else 'malformed'}",
+            )
     try:
         data = np.loadtxt(io.StringIO("\n".join(lines[1:])), delimiter=",", ndmin=2)
     except ValueError as exc:
-        raise ConfigError(str(path), "unreadable rows", f"numeric CSV rows ({exc})") from exc
+        for number, line in enumerate(lines[1:], start=2):  # name the line and column
+            for name, value in zip(names, line.split(","), strict=True):
+                try:
+                    float(value)
+                except ValueError:
+                    raise ConfigError(f"{path}: line {number}, {name}", value, "a number") from None
+        raise ConfigError(str(path), "unreadable values", f"numbers ({exc})") from None
     if data.shape[1] != len(names):
         raise ConfigError(str(path), f"{data.shape[1]} columns", f"{len(names)} (the header)")
     return {n: data[:, i] for i, n in enumerate(names)}

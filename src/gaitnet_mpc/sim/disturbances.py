@@ -14,6 +14,15 @@ from gaitnet_mpc.errors import ConfigError
 MAX_PUSH_FORCE_N = 1000.0  # force magnitude [N]
 MAX_PUSH_DURATION_S = 5.0  # duration [s]
 MAX_PUSH_IMPULSE_NS = 100.0  # impulse magnitude [N s]
+#: The fields :class:`Push` checks, as the keys of ``--push`` and of a ``[[pushes]]`` table
+#: of ``scenario.toml`` that set them (the names their errors give).
+_KEYS = {
+    "push.t": ("t", "t_s"),
+    "push.dur": ("dur", "duration_s"),
+    "push.f": ("fx,fy,fz", "force_world_n"),
+    "push.force": ("fx,fy,fz", "force_world_n"),
+    "push.impulse": ("impulse", "force_world_n x duration_s"),
+}
 
 
 @dataclass(frozen=True)
@@ -83,7 +92,11 @@ class Push:
             if key not in values:
                 raise ConfigError("--push", text, f"a value for '{key}'")
         force = (values.get("fx", 0.0), values.get("fy", 0.0), values.get("fz", 0.0))
-        return cls(t_s=values["t"], force_world_n=force, duration_s=values["dur"])
+        try:
+            return cls(t_s=values["t"], force_world_n=force, duration_s=values["dur"])
+        except ConfigError as exc:
+            field = f"--push {_KEYS[exc.field][0]}" if exc.field in _KEYS else exc.field
+            raise ConfigError(field, exc.value, exc.expected) from None
 
     @classmethod
     def from_table(cls, raw: object, key: str) -> Push:
@@ -101,7 +114,11 @@ class Push:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise ConfigError(f"{key}.force_world_n", value, "a number")
         fx, fy, fz = (float(v) for v in force)
-        return cls(float(raw["t_s"]), (fx, fy, fz), float(raw["duration_s"]))
+        try:
+            return cls(float(raw["t_s"]), (fx, fy, fz), float(raw["duration_s"]))
+        except ConfigError as exc:
+            field = f"{key}.{_KEYS[exc.field][1]}" if exc.field in _KEYS else exc.field
+            raise ConfigError(field, exc.value, exc.expected) from None
 
 
 def protocol_pushes(

@@ -274,7 +274,7 @@ def read_course_json(path: str | Path) -> CourseJSON:
     if size > PROGRESS_FILE_BYTES:
         print(f"reading course {p.name} ({size / 1e6:.1f} MB) ...", file=sys.stderr, flush=True)
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark (some Windows editors) skipped
     except UnicodeDecodeError as exc:
         raise CourseFormatError(
             "course", str(path), f"a UTF-8 text JSON course file (byte {exc.start} is not)"
