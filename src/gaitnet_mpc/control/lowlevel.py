@@ -35,7 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from gaitnet_mpc.config import bounded, check_ranges
-from gaitnet_mpc.kinematics.leg_ik import leg_geometries, whole_body_ik
+from gaitnet_mpc.kinematics.leg_ik import foot_ik, leg_geometries
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -177,21 +177,19 @@ class LowLevelController:
                 a = rest[0] if rest and ff > 0.0 else np.zeros(3)
                 targets[f] = p + k * v + 0.5 * k**2 * a  # (n, 3)
             base_next = p_base + k * v_base
-            n = len(k)
-            yaw = None if swing_yaw_rad is None else {f: np.full(n, swing_yaw_rad) for f in feet}
-            sol = whole_body_ik(r, base_next, rot, targets, yaw, geometries=self.geometries)
+            yaw = None if swing_yaw_rad is None else np.full(len(k), swing_yaw_rad)
             upper = pin.crba(model, data, q) if ff > 0.0 else None  # upper triangle filled
             for foot in feet:
                 idx = r.leg_joint_index[foot]
-                q_des = sol.joint_pos_rad[0, idx]
-                qd_des = (sol.joint_pos_rad[1, idx] - q_des) / dt
+                q_ik = foot_ik(self.geometries[foot], targets[foot], base_next, rot, yaw).q_rad
+                q_des = q_ik[0]
+                qd_des = (q_ik[1] - q_des) / dt
                 tau[idx] = (
                     c.swing_kp_nm_per_rad * (q_des - qj[idx])
                     + c.swing_kd_nms_per_rad * (qd_des - qdj[idx])
                     + gravity[idx]
                 )
                 if upper is not None:
-                    q_ik = sol.joint_pos_rad[:, idx]
                     qdd_des = (q_ik[2] - 2.0 * q_ik[1] + q_ik[0]) / dt**2
                     n_leg = len(idx)  # joints ascending: the block's upper triangle is M's
                     block = upper.ravel()[self._mass_block[foot]].reshape(n_leg, n_leg)

@@ -416,13 +416,28 @@ def whole_body_ik(
     q = np.tile(robot.nominal_joint_pos(), (n, 1))  # (N, n_joints)
     ok = np.ones(n, dtype=bool)
     for foot, target in targets.items():
-        geom = geoms[foot]
-        if isinstance(geom, PlanarLegGeometry):
-            pitch = np.arctan2(rot[:, 0, 2], rot[:, 0, 0])
-            sol = planar_leg_ik(geom, target[:, [0, 2]], p_base[:, [0, 2]], pitch, tol)
-        else:
-            yaw = None if foot_yaw_rad is None else foot_yaw_rad.get(foot)
-            sol = leg_ik(geom, target, p_base, rot, yaw, tol)
+        yaw = None if foot_yaw_rad is None else foot_yaw_rad.get(foot)
+        sol = foot_ik(geoms[foot], target, p_base, rot, yaw, tol)
         q[:, robot.leg_joint_index[foot]] = sol.q_rad
         ok &= sol.reachable
     return WholeBodyIKSolution(q, ok)
+
+
+def foot_ik(
+    geom: LegGeometry | PlanarLegGeometry,
+    p_foot_world_m: np.ndarray,
+    p_base_world_m: np.ndarray,
+    rot_base_world: np.ndarray,
+    foot_yaw_rad: np.ndarray | None = None,
+    tol: float = 1e-9,
+) -> LegIKSolution:
+    """One leg's IK by its geometry: :func:`leg_ik`, or :func:`planar_leg_ik` for the
+    biped (trunk pitch read from ``rot_base_world``, ``foot_yaw_rad`` ignored). Shapes
+    as in :func:`whole_body_ik`."""
+    if isinstance(geom, PlanarLegGeometry):
+        target = np.asarray(p_foot_world_m, dtype=float).reshape(-1, 3)
+        p_base = np.asarray(p_base_world_m, dtype=float).reshape(-1, 3)
+        rot = np.asarray(rot_base_world, dtype=float).reshape(-1, 3, 3)
+        pitch = np.arctan2(rot[:, 0, 2], rot[:, 0, 0])
+        return planar_leg_ik(geom, target[:, [0, 2]], p_base[:, [0, 2]], pitch, tol)
+    return leg_ik(geom, p_foot_world_m, p_base_world_m, rot_base_world, foot_yaw_rad, tol)
