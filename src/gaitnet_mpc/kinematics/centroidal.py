@@ -287,9 +287,18 @@ def centroidal_map_euler(
     model: pin.Model | RobotModel, data: pin.Data | None, q: np.ndarray
 ) -> np.ndarray:
     """``A_xi = A_G T`` (6, nv): eq. 6's map acting on Euler-coordinate rates ``xi_dot``."""
+    return euler_map_and_coordinates(model, data, q)[0]
+
+
+def euler_map_and_coordinates(
+    model: pin.Model | RobotModel, data: pin.Data | None, q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`centroidal_map_euler` (6, nv) and :func:`euler_coordinates` (nv,) of one
+    configuration ``q`` (nq,), from one pass."""
     m = _pin_model(model)
     q = np.asarray(q, dtype=float).reshape(1, m.nq)
-    return _euler_maps(m, _data(m, data), q, np.zeros((1, m.nv)), with_dot=False)[0][0]
+    a_xi, _, xi = _euler_maps(m, _data(m, data), q, np.zeros((1, m.nv)), with_dot=False)
+    return a_xi[0], xi[0]
 
 
 # ------------------------------------------------------------ centroidal pose H

@@ -37,7 +37,7 @@ from gaitnet_mpc.dt_policy import (
     NOMINAL_DT_S,
 )
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.kinematics.centroidal import centroidal_map_euler, euler_coordinates, f_j2m
+from gaitnet_mpc.kinematics.centroidal import euler_map_and_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
     CentroidalReference,
     ReferenceTiming,
@@ -273,12 +273,12 @@ def angular_pose_kgm2(
     the trunk orientation. The yaw coordinate is taken relative to ``yaw_origin_rad`` so
     that long turns do not wrap.
     """
-    xi = euler_coordinates(robot.pin_model, q)
+    a_xi, xi = euler_map_and_coordinates(robot.pin_model, data, q)
     if not robot.spec.planar:
         # wrapped as (a + pi) mod 2 pi - pi, not geometry.wrap_angle: the atan2 form differs in
         # the last bit and changes the closed-loop logs (measured)
         xi[5] = (xi[5] - yaw_origin_rad + np.pi) % (2 * np.pi) - np.pi
-    return (centroidal_map_euler(robot.pin_model, data, q) @ xi)[3:]
+    return (a_xi @ xi)[3:]
 
 
 class SequentialKDMPC:
