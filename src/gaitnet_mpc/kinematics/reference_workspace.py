@@ -133,9 +133,9 @@ class ReferenceWorkspace:
         self.momentum(q_nom[None, :], np.zeros((1, self.model.nv)))
         rows = np.zeros((1, _N_FEET), dtype=np.int64)
         plan_rows(np.zeros((1, 3)), np.zeros(1), rows, rows, np.zeros((1, _N_FEET)), 0.1, False)
-        foothold_means(
-            np.zeros((1, _N_FEET, 3)), np.ones((1, _N_FEET), bool), rows, np.zeros((1, 3))
-        )
+        on_ground = np.ones((1, _N_FEET), bool)
+        on_ground.flags.writeable = False  # a ReferenceTiming's contact; numba types it apart
+        foothold_means(np.zeros((1, _N_FEET, 3)), on_ground, rows, np.zeros((1, 3)))
 
     def _measure_com_gains(
         self, p_base: np.ndarray, p_feet: dict[str, np.ndarray]

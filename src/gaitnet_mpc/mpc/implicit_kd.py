@@ -179,8 +179,10 @@ class KDSubproblem:
         x0[:3] = mass * p_com[0]
         pose = np.zeros((h + 1, 6))
         pose[:, :3] = mass * p_com
+        dts = np.full(h, 0.05)
+        dts.flags.writeable = False  # as a ReferenceTiming's: numba types read-only apart
         inputs = self.inputs(
-            it, x0, np.zeros((h + 1, 6)), pose, p_foot, p_com, np.full(h, 0.05), contact,
+            it, x0, np.zeros((h + 1, 6)), pose, p_foot, p_com, dts, contact,
             np.zeros((h, N_FEET)),
         )  # fmt: skip
         self._solve_condensed(it, inputs)
