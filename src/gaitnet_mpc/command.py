@@ -37,6 +37,16 @@ class Command:
     def to_dict(self) -> dict[str, float]:
         return {"vx_mps": self.vx_mps, "vy_mps": self.vy_mps, "yaw_rate_radps": self.yaw_rate_radps}
 
+    @classmethod
+    def from_table(cls, values: dict[str, float], key: str) -> Command:
+        """The command of a file's table ``key``; an error names ``key.<field>``, not the
+        ``run`` option that sets it."""
+        try:
+            return cls(**values)
+        except ConfigError as exc:
+            names = {option: f"{key}.{name}" for name, option in OPTIONS.items()}
+            raise ConfigError(names.get(exc.field, exc.field), exc.value, exc.expected) from None
+
 
 @dataclass(frozen=True)
 class CommandProfile:

@@ -40,7 +40,6 @@ from typing import Any
 import tomli_w
 
 from gaitnet_mpc import config as configio
-from gaitnet_mpc.command import OPTIONS as COMMAND_OPTIONS
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.control.registry import (
@@ -175,11 +174,7 @@ class Scenario:
             course = str(path if path.is_absolute() else base_dir / path)
         seed = data.get("course_seed", configio.NONE)
         values = _floats("command", data.get("command", {}), Command().to_dict())
-        try:
-            command = Command(**values)
-        except ConfigError as exc:  # named by the file's key, not by run's option
-            keys = {option: f"command.{name}" for name, option in COMMAND_OPTIONS.items()}
-            raise ConfigError(keys.get(exc.field, exc.field), exc.value, exc.expected) from None
+        command = Command.from_table(values, "command")
         pushes = [
             Push.from_table(raw, f"pushes[{i}]")
             for i, raw in enumerate(_typed("pushes", data.get("pushes", []), list))

@@ -95,7 +95,6 @@ timings (:mod:`~gaitnet_mpc.mpc.kd_config`), the tie groups
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -104,7 +103,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.mpc import kd_condensed_kernel as condensed_kernel
 from gaitnet_mpc.mpc.centroidal_model import (
     N_FEET,
     NX,
@@ -383,7 +381,7 @@ class KDSubproblem:
         # ---- box: foot positions (measured stance foot, eq. 24, trust region)
         lb = np.full(self.n, -np.inf)
         ub = np.full(self.n, np.inf)
-        lo_pf, hi_pf = self.foot_bounds(it, a)
+        lo_pf, hi_pf = a.foot_bounds(it, c.foot_height_from_reference, c.trust_region_m)
         lb[self._col_pf] = lo_pf - it.p_foot
         ub[self._col_pf] = hi_pf - it.p_foot
         if c.trust_region_com_m is not None:
@@ -414,28 +412,6 @@ class KDSubproblem:
         d = it.p_foot[:, 0, :2] - it.p_foot[:, 1, :2]
         return n_y, np.einsum("kj,kj->k", n_y, d)
 
-    def foot_bounds(self, it: KDIterate, a: KDInputs) -> tuple[np.ndarray, np.ndarray]:
-        """Absolute bounds ``lo, hi`` (h, 2, 3) on each stage's foot position: per tie
-        group (:func:`~gaitnet_mpc.mpc.foot_ties.tie_groups`: swing stages, then the
-        stance stages after them), the measured position for the measured stance group;
-        else the eq. 24 box if the group holds a masked stage, the reference height (mean
-        over the group's stance stages, or all its stages) unless that box bounds the
-        height, and the trust region around the group's mean iterate
-        (:func:`~gaitnet_mpc.mpc.kd_condensed_kernel.foot_bounds`)."""
-        c = self.config
-        has_box = np.zeros(N_FEET, dtype=bool)
-        box = np.zeros((2, N_FEET, 3))
-        mask = np.zeros((N_FEET, self.horizon), dtype=bool)
-        for i, bounds in enumerate(a.foothold_bounds):
-            if bounds is not None:
-                has_box[i] = True
-                box[0, i], box[1, i], mask[i] = bounds
-        return condensed_kernel.foot_bounds(
-            a.contact, it.p_foot, np.ascontiguousarray(a.p_foot_ref[:, :, 2]),
-            a.p_foot_measured, has_box, box[0], box[1], mask, c.foot_height_from_reference,
-            math.nan if c.trust_region_m is None else float(c.trust_region_m),
-        )  # fmt: skip
-
     def plan_cost(self, iterate: KDIterate, states: np.ndarray, inputs: KDInputs) -> float:
         """Eq. 18 at a plan: ``iterate`` (footholds, CoM path, wrenches) with the predicted
         ``states`` (h + 1, 12) ``[H; l_G; k_G]``, against the references of ``inputs``
@@ -456,7 +432,8 @@ class KDSubproblem:
         """The condensed form of the QP of :meth:`build` (``qp_form="condensed"``)."""
         assert self.condensed is not None
         wrench_rows = self._wrench.stack(inputs.foot_yaw_rad)
-        lo, hi = self.foot_bounds(iterate, inputs)
+        c = self.config
+        lo, hi = inputs.foot_bounds(iterate, c.foot_height_from_reference, c.trust_region_m)
         return self.condensed.condense(iterate, inputs, wrench_rows, lo, hi)
 
     def _solve_condensed(

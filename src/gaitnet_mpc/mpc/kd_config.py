@@ -4,7 +4,9 @@ Backend timing (``qp_form="sparse"``, ``qp_backend="piqp"``)
 ----------------------------------------------------------
 Since 2026-12-05 the QP is condensed by default (``qp_form="condensed"``, DAQP on 62-100
 variables, ``benchmarks/results/kd_qp_condensed.md``: 0.8 ms per QP against PIQP's 2.0 ms
-in one run). The sparse form's backends, measured before that:
+in one run); since 2026-12-06 compiled kernels build it straight from the iterate, 0.3 ms
+per QP (``docs/design/realtime.md``, decision 10). The sparse form's backends, measured
+before that:
 
 QP: n = 33 h + 15 = 345 variables, 15 h + 15 = 165 equality rows (nnz 975), 254
 inequality rows (20 x 10 line-foot wrench rows + 54 tie rows, nnz 1308; 8 rows per foot

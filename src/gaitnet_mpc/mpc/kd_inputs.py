@@ -9,12 +9,14 @@ arrays of the right shapes (:class:`~gaitnet_mpc.errors.ConfigError` otherwise).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from gaitnet_mpc.errors import ConfigError
+from gaitnet_mpc.mpc import kd_condensed_kernel as condensed_kernel
 from gaitnet_mpc.mpc.centroidal_model import N_FEET, NX
 from gaitnet_mpc.mpc.checks import bool_array, float_array
 from gaitnet_mpc.mpc.foot_ties import next_touchdown_mask
@@ -103,6 +105,26 @@ class KDInputs:
         )
         bounds = _check_foothold_bounds(foothold_bounds, fields["contact"])
         return cls(**fields, p_foot_measured=measured, foothold_bounds=bounds)
+
+    def foot_bounds(
+        self, it: KDIterate, height_from_reference: bool, trust_region_m: float | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Absolute bounds ``lo, hi`` (h, 2, 3) on each stage's foot position about the
+        iterate ``it``: per tie group (:func:`~gaitnet_mpc.mpc.foot_ties.tie_groups`), the
+        measured position, the eq. 24 box, the reference height and the trust region
+        (:func:`~gaitnet_mpc.mpc.kd_condensed_kernel.foot_bounds`)."""
+        has_box = np.zeros(N_FEET, dtype=bool)
+        box = np.zeros((2, N_FEET, 3))
+        mask = np.zeros((N_FEET, self.dts_s.shape[0]), dtype=bool)
+        for i, bounds in enumerate(self.foothold_bounds):
+            if bounds is not None:
+                has_box[i] = True
+                box[0, i], box[1, i], mask[i] = bounds
+        return condensed_kernel.foot_bounds(
+            self.contact, it.p_foot, np.ascontiguousarray(self.p_foot_ref[:, :, 2]),
+            self.p_foot_measured, has_box, box[0], box[1], mask, height_from_reference,
+            math.nan if trust_region_m is None else float(trust_region_m),
+        )  # fmt: skip
 
     def with_references(
         self, h_ref: object, H_ref: object, p_foot_ref: object, p_com_ref: object, dts_s: object
