@@ -454,7 +454,8 @@ class KDSubproblem:
         return sol, parts
 
     def solve(self, iterate: KDIterate, inputs: KDInputs) -> KDStep:
-        """Build (see :meth:`build`) and solve the CMPC QP; return the search directions.
+        """Solve the CMPC QP (condensed with ``qp_form="condensed"``, else or where DAQP
+        fails the sparse QP of :meth:`build`); return the search directions.
 
         Raises:
             QPSolveError: the backend found no usable solution.
