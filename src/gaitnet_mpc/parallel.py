@@ -19,6 +19,8 @@ exit status 130).
 from __future__ import annotations
 
 import signal
+import socket
+import threading
 from collections.abc import Callable, Generator, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -31,6 +33,34 @@ R = TypeVar("R")
 
 #: How often the runners look at the workers and the progress queue [s].
 POLL_PERIOD_S = 0.5
+#: How long :func:`check_ray_address` waits for a cluster's port to answer [s]; Ray's own
+#: connection retries last minutes.
+RAY_CONNECT_TIMEOUT_S = 15.0
+#: Addresses that name no host:port (Ray finds the local cluster itself).
+_RAY_LOCAL_ADDRESSES = ("auto", "local")
+
+
+def check_ray_address(
+    address: str, option: str = "--address", timeout_s: float = RAY_CONNECT_TIMEOUT_S
+) -> None:
+    """Raise a :class:`ConfigError` naming ``option`` unless ``address`` is ``auto``,
+    ``local`` or a ``[ray://]host:port`` whose port accepts a TCP connection within
+    ``timeout_s`` (an unknown host or a closed port fails at once), before Ray is asked."""
+    if address in _RAY_LOCAL_ADDRESSES:
+        return
+    expected = "a Ray cluster's host:port (or auto) that accepts a connection"
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(option, address, "a Ray cluster's host:port (or auto)")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s).close()
+    except socket.gaierror as exc:
+        raise ConfigError(option, address, f"{expected} (unknown host: {exc.strerror})") from None
+    except TimeoutError:
+        why = f"no answer within {timeout_s:g} s"
+        raise ConfigError(option, address, f"{expected} ({why})") from None
+    except OSError as exc:
+        raise ConfigError(option, address, f"{expected} ({exc.strerror or exc})") from None
 
 
 @dataclass(frozen=True)
@@ -165,16 +195,31 @@ def run_ray(
             Ray's default).
 
     Raises:
-        ConfigError: Ray is not installed, or ``workers`` is not an integer >= 1.
+        ConfigError: Ray is not installed, ``workers`` is not an integer >= 1, or
+            ``address`` does not answer (:func:`check_ray_address`); raised by this call,
+            before the first outcome is asked for.
     """
     _check_workers(workers)
+    if address is not None:
+        check_ray_address(address)
     try:
-        import ray
+        import ray  # noqa: F401
     except ImportError as exc:
         reraise_interrupt(exc)
         raise ConfigError(
             "--backend", "ray", "Ray installed (pip install 'gaitnet-mpc[ray]')"
         ) from None
+    return _ray_outcomes(fn, items, workers, address, max_retries)
+
+
+def _ray_outcomes(
+    fn: Callable[[T], R],
+    items: Sequence[T],
+    workers: int,
+    address: str | None,
+    max_retries: int | None,
+) -> Generator[Outcome[T, R], None, None]:
+    import ray
     from ray.exceptions import RayError, RayTaskError
 
     started = not ray.is_initialized()
@@ -182,7 +227,11 @@ def run_ray(
         kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
         if address is None:
             kwargs["num_cpus"] = workers
+        main_thread = threading.current_thread() is threading.main_thread()
+        on_term = signal.getsignal(signal.SIGTERM) if main_thread else None
         ray.init(address=address, **kwargs)
+        if on_term is not None:  # ray.init installs a SIGTERM handler that exits at once
+            signal.signal(signal.SIGTERM, on_term)  # ours: SIGTERM stops as Ctrl-C does
     try:
         options: dict[str, Any] = {"num_cpus": 1}
         if max_retries is not None:

@@ -209,7 +209,7 @@ def main(args: argparse.Namespace) -> int:
                 print(file=sys.stderr)
             else:
                 report = reproduce.table1(args.data, out)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemExit):  # SystemExit: a library's SIGTERM handler
             resume = args.what in reproduce.RESUMABLE
             note = "run the same command again to resume" if resume else "run it again"
             write_status(
@@ -220,6 +220,9 @@ def main(args: argparse.Namespace) -> int:
                 todo=[args.what],
                 note=note,
             )
+            raise
+        except Exception:  # a named error, a crash: the status does not stay running
+            write_status(out, command=command, state="failed", todo=[args.what])
             raise
         write_status(out, command=command, state="done", exit_code=0, done=[args.what])
     print(report.read_text(), end="")

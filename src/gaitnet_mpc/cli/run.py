@@ -362,7 +362,7 @@ def _run(args: argparse.Namespace, scenario: Any, episode: Any, out: Path) -> in
     from gaitnet_mpc.cli.viewer import open_viewer
     from gaitnet_mpc.results.outdir import write_status
     from gaitnet_mpc.runner.episode import VideoConfig
-    from gaitnet_mpc.scenario import run_scenario, scenario_warnings
+    from gaitnet_mpc.scenario import scenario_warnings, simulate_episode
 
     command = shlex.join(["gaitnet-mpc", *args.argv])
     extra = []
@@ -379,13 +379,12 @@ def _run(args: argparse.Namespace, scenario: Any, episode: Any, out: Path) -> in
         file=sys.stderr,
         flush=True,
     )
-    summary = run_scenario(
-        scenario,
+    summary = simulate_episode(  # run_scenario's simulation, in the folder claimed above
+        episode,
         out,
         video=video,
         progress=not args.no_progress,
         viewer_factory=open_viewer if args.viewer else None,
-        episode=episode,
         extra_warnings=extra,
     )
     plots_s = None

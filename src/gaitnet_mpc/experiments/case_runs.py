@@ -137,12 +137,12 @@ def run_cases(
         f"{run.what}: {len(todo)} of {len(cases)} cases to run ({len(records)} already in "
         f"{run.path}), {options.workers} worker(s), backend {options.backend}"
     )
-    status("running")
     items = [(case, str(run.folder.resolve())) for case in todo]
-    if options.backend == "ray":
+    if options.backend == "ray":  # checks Ray and --address before the status says running
         runs = run_ray(run.worker, items, options.workers, options.address, max_retries=0)
     else:
         runs = run_processes(run.worker, items, options.workers)
+    status("running")
     n = 0
     try:
         with closing(runs), stop_signals_as_keyboard_interrupt():
@@ -169,13 +169,16 @@ def run_cases(
                 status("running")
                 if options.progress:
                     log(f"[{n}/{len(todo)}] {run.case_line(record)}")
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemExit):  # SystemExit: a library's own SIGTERM handler
         run.outputs(failed)
         status("interrupted", 130)
         log(
             f"interrupted: {len(records)} of {len(cases)} cases are in {run.path}; "
             "run the same command again to run the rest"
         )
+        raise
+    except Exception:  # a worker's named error, a crash: the status does not stay running
+        status("failed")
         raise
     run.outputs(failed)
     log(f"ran {n - len(failed)} cases in {time.perf_counter() - t0:.0f} s into {run.folder}")

@@ -306,7 +306,6 @@ def collect(
             f"{folder}), {protocol.seconds_per_set:g} s each, teacher {protocol.teacher}, "
             f"{options.workers} worker(s), backend {options.backend}"
         )
-        status("running")
         bar = _progress_bar(len(todo) * protocol.seconds_per_set) if options.progress else None
         t0 = time.perf_counter()
 
@@ -314,7 +313,13 @@ def collect(
             if bar is not None:
                 bar.update(sim_s)
 
-        runs = _runs(todo, options, on_progress if bar is not None else None)
+        try:  # checks Ray and --address before the status says running
+            runs = _runs(todo, options, on_progress if bar is not None else None)
+        except BaseException:
+            if bar is not None:
+                bar.close()
+            raise
+        status("running")
         manifest = None
         try:
             with closing(runs), stop_signals_as_keyboard_interrupt():
@@ -347,13 +352,16 @@ def collect(
                         bar.update(protocol.seconds_per_set)
                     line = _set_line(spec, stats, wall_s, len(entries), protocol.sets)
                     (bar.write if bar is not None else log)(line)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemExit):  # SystemExit: a library's SIGTERM handler
             left = protocol.sets - len(entries)
             status("interrupted", 130)
             log(
                 f"interrupted: {len(entries)} of {protocol.sets} sets are in {folder}, {left} "
                 "left; run the same command again to collect them"
             )
+            raise
+        except Exception:  # a worker's named error, a crash: the status does not stay running
+            status("failed")
             raise
         finally:
             if bar is not None:

@@ -35,7 +35,13 @@ from gaitnet_mpc.results.plots import FOOT_COLORS, FOOT_MARKERS
 from gaitnet_mpc.results.rundir import RUN_ARTIFACTS, RunFolder, load_run
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.runner.episode import VideoConfig
-from gaitnet_mpc.scenario import Episode, Scenario, make_scenario, run_scenario
+from gaitnet_mpc.scenario import (
+    Episode,
+    Scenario,
+    build_episode,
+    make_scenario,
+    simulate_episode,
+)
 from gaitnet_mpc.sim.simulator import Simulator
 from gaitnet_mpc.terrain import Course
 
@@ -92,7 +98,7 @@ def run_in_folder(
     on_step: Callable[[Simulator], None] | None = None,
 ) -> RunFolder:
     """One episode into the run folder ``folder`` (an earlier run's files there removed):
-    ``run_scenario``, with ``on_step`` as its hook.
+    ``simulate_episode`` (the folder is the figure's own), with ``on_step`` as its hook.
 
     Raises:
         KeyboardInterrupt: the episode was interrupted (its run folder is kept).
@@ -104,7 +110,8 @@ def run_in_folder(
         elif target.exists():
             target.unlink()
     t0 = time.perf_counter()
-    run_scenario(scenario, folder, video=video, episode=episode, on_step=on_step)
+    episode = build_episode(scenario) if episode is None else episode
+    simulate_episode(episode, folder, video=video, on_step=on_step)
     run = load_run(folder)
     s = run.summary
     if s.get("interrupted"):  # run_episode stops on Ctrl-C / SIGTERM: so does the figure

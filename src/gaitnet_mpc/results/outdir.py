@@ -199,13 +199,15 @@ def claim_output_folder(
     default_prefix: str,
     artifacts: Sequence[str],
     overwrite: bool = False,
+    overwrite_hint: str = "--overwrite",
 ) -> Iterator[Path]:
     """The output folder, locked for the block, new or emptied of earlier results.
 
     ``path`` None: a new folder :func:`new_folder_name`. Otherwise the folder must be new,
     empty, or, with ``overwrite``, hold only earlier ``artifacts`` (and temporary files of
     interrupted atomic writes), which are removed, so it ends up holding only the new
-    results.
+    results. ``overwrite_hint`` is how the caller's user asks for ``overwrite`` (a flag,
+    or ``overwrite=True`` in Python), for the error message.
 
     Raises:
         ConfigError: naming ``option``, the path and what was expected; also when another
@@ -217,12 +219,12 @@ def claim_output_folder(
     except OSError as exc:
         raise ConfigError(option, str(folder), f"a writable folder ({exc.strerror})") from None
     with folder_lock(folder, option=option):
-        _empty_or_overwrite(folder, option, tuple(artifacts), overwrite)
+        _empty_or_overwrite(folder, option, tuple(artifacts), overwrite, overwrite_hint)
         yield folder
 
 
 def _empty_or_overwrite(
-    folder: Path, option: str, artifacts: tuple[str, ...], overwrite: bool
+    folder: Path, option: str, artifacts: tuple[str, ...], overwrite: bool, hint: str
 ) -> None:
     names = sorted(p.name for p in folder.iterdir() if p.name != LOCK)
     if not names:
@@ -232,7 +234,7 @@ def _empty_or_overwrite(
             option,
             str(folder),
             f"a new or empty folder (it holds {', '.join(names[:4])}"
-            f"{', ...' if len(names) > 4 else ''}); pass --overwrite to replace the results in it",
+            f"{', ...' if len(names) > 4 else ''}); pass {hint} to replace the results in it",
         )
     ours = [n for n in names if n in artifacts or (n.startswith(".") and n.endswith(".part"))]
     foreign = [n for n in names if n not in ours]

@@ -1,38 +1,10 @@
-"""One run, described once: :class:`Scenario`, and the one function that runs it.
-
-A scenario is a frozen, typed description of an episode: the robot, the course and its
-layout seed, the controller with its full settings (for the kino-dynamic controllers the
-dt policy too, ``KDWalkConfig.dt_policy``), the velocity command, the disturbances (pushes,
-an unknown payload) and the duration. It is made from Python (:func:`make_scenario`),
-from CLI arguments (``gaitnet-mpc run``, which calls :func:`make_scenario`), or from a TOML
-file (:meth:`Scenario.from_toml`); :func:`run_scenario` writes it into the run folder as
-``scenario.toml``, and ``gaitnet-mpc run --scenario runs/x/scenario.toml`` replays run
-``x``: the simulation is deterministic, so the replay's ``summary.json`` is identical
-(wall-clock figures live in ``timing.json``).
-
-Every command that simulates builds its episodes here (:func:`build_episode`), so a
-benchmark, a data-collection set and ``gaitnet-mpc run`` with the same scenario run the
-same thing.
-
-TOML layout of ``scenario.toml``::
-
-    robot = "humanoid3d"
-    controller = "gaitnet"
-    course = "stepping-stones"   # a built-in name, or a course JSON file
-    course_seed = 3              # "none": the built-in layout
-    duration_s = 8.0
-    payload_kg = 0.0
-    [cart]                       # optional: a cart the hands push (Fig. 10), see sim.cart
-    [command]                    # vx_mps, vy_mps, yaw_rate_radps
-    [[pushes]]                   # t_s, force_world_n = [fx, fy, fz], duration_s
-    [origin]                     # how the settings were made (preset, --set, ...): a record
-    [config]                     # the controller's full settings (see gaitnet_mpc.config)
-"""
+"""The scenario itself: :class:`Scenario` (checked, to and from TOML), :func:`make_scenario`
+as ``gaitnet-mpc run`` makes one, and :func:`build_episode` (see the package docstring)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -51,9 +23,7 @@ from gaitnet_mpc.control.registry import (
     make_controller,
 )
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.robots import ROBOTS, RobotModel, load_robot
-from gaitnet_mpc.runner.episode import VideoConfig, run_episode
 from gaitnet_mpc.sim.cart import Cart
 from gaitnet_mpc.sim.disturbances import Push
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
@@ -62,9 +32,6 @@ from gaitnet_mpc.terrain import BUILTIN_COURSES, SEEDED_COURSES, Course, load_co
 #: Shortest and longest simulated time of a scenario [s]: one control tick, one hour.
 MIN_DURATION_S = 0.01
 MAX_DURATION_S = 3600.0
-#: File names a run folder gets from :func:`run_scenario`.
-SCENARIO_FILE = "scenario.toml"
-CONFIG_FILE = "config.toml"
 
 
 @dataclass(frozen=True)
@@ -421,80 +388,3 @@ def scenario_meta(episode: Episode, warnings: list[str]) -> dict[str, Any]:
         "seed": s.course_seed,
         "terrain_knowledge": episode.controller.terrain_knowledge(),
     }
-
-
-def write_scenario_files(scenario: Scenario, out_dir: Path) -> None:
-    """``scenario.toml`` and (for a controller with settings) ``config.toml`` in ``out_dir``."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    header = (
-        f"`gaitnet-mpc run --scenario {SCENARIO_FILE}` replays this run (identical "
-        'summary.json);\n"none" stands for None.'
-    )
-    write_atomic(out_dir / SCENARIO_FILE, scenario.to_toml(header))
-    if scenario.config is not None:
-        text = (
-            f"Settings of the {scenario.controller} controller "
-            f"({type(scenario.config).__name__}) on {scenario.robot}, after the preset,\n"
-            "--config, the flags and --set. `--config config.toml` repeats them; "
-            '"none" stands for None.'
-        )
-        if scenario.controller in ("kd", "gaitnet", "oracle"):
-            text += "\nsequential.kd.mass_kg and min_foot_separation_m are set from the robot."
-        write_atomic(out_dir / CONFIG_FILE, configio.dumps(scenario.config, text))
-
-
-def run_scenario(
-    scenario: Scenario,
-    out_dir: str | Path | None = None,
-    *,
-    video: VideoConfig | None = None,
-    progress: bool = False,
-    viewer_factory: Any = None,
-    robot: RobotModel | None = None,
-    episode: Episode | None = None,
-    extra_warnings: Sequence[str] = (),
-    on_step: Callable[[Simulator], None] | None = None,
-) -> dict[str, Any]:
-    """Simulate ``scenario`` until its duration or a fall; return the summary.
-
-    With ``out_dir``, write the run folder there (``scenario.toml``, ``config.toml``,
-    ``summary.json``, ``timing.json``, logs, course, video if ``video``); the folder is
-    created if needed and is expected to be fresh (``gaitnet-mpc run`` checks that).
-
-    Args:
-        viewer_factory: called with the simulator, returns an open MuJoCo passive viewer
-            handle (``gaitnet-mpc run --viewer``); closed at the end. None: no viewer.
-        robot: an already loaded model of ``scenario.robot``; None: load it.
-        episode: ``build_episode(scenario)`` made by the caller (who checked it before
-            preparing ``out_dir``); None: built here.
-        extra_warnings: the caller's own notes on ineffective options (recorded with
-            :func:`scenario_warnings` in the summary's ``warnings``).
-        on_step: called with the simulator after every physics step (``run_episode``'s
-            hook: e.g. poses for a snapshot strip); it must not change the simulation.
-    """
-    if episode is None:
-        episode = build_episode(scenario, robot=robot)
-    elif episode.scenario is not scenario:
-        raise ConfigError("episode", "another scenario's", "build_episode(scenario)")
-    out = None if out_dir is None else Path(out_dir)
-    if out is not None:
-        write_scenario_files(scenario, out)
-    warnings = [*scenario_warnings(scenario), *extra_warnings]
-    meta = scenario_meta(episode, warnings)
-    viewer = viewer_factory(episode.sim) if viewer_factory is not None else None
-    try:
-        return run_episode(
-            episode.sim,
-            episode.controller,
-            scenario.command,
-            scenario.duration_s,
-            out,
-            video if out is not None else None,
-            progress=progress,
-            meta=meta,
-            viewer=viewer,
-            on_step=on_step,
-        )
-    finally:
-        if viewer is not None:
-            viewer.close()
