@@ -105,7 +105,6 @@ class ReferenceWorkspace:
         #: the model as arrays for the compiled CoM and momentum, None: Pinocchio's
         self.tree: KinematicTree | None = tree_of(self.model)
         self._nominal_joints = robot.nominal_joint_pos()
-        self._leg_columns = [robot.n_root_q + np.asarray(robot.leg_joint_index[f]) for f in FEET]
 
         q_nom, _ = robot.mj_to_pin(robot.standing_qpos(), np.zeros(robot.nv))
         com_nom = np.array(pin.centerOfMass(self.model, self.data, q_nom, False))
@@ -184,33 +183,30 @@ class ReferenceWorkspace:
         if self.planar:  # the sagittal IK of whole_body_ik
             targets = {f: p_foot_m[:, i] for i, f in enumerate(FEET)}
             sol = whole_body_ik(self.robot, p_base_m, rot, targets, geometries=self.geometries)
-            return configurations(self, p_base_m, yaw_rad, pitch, sol.joint_pos_rad), sol.reachable
-        n = p_base_m.shape[0]
-        p_base = np.ascontiguousarray(p_base_m)
-        rot = np.ascontiguousarray(rot)
-        root = self.robot.n_root_q
-        q = np.empty((n, self.model.nq))
-        q[:, root:] = self._nominal_joints
-        leg_q = np.empty((n, 5))
-        reach = np.empty(n, dtype=bool)
-        reachable = np.ones(n, dtype=bool)
-        no_yaw = np.zeros(n)
-        for i, f in enumerate(FEET):
-            g = self.geometries[f]
-            assert isinstance(g, LegGeometry)
-            yaw = no_yaw if foot_yaw_rad is None else np.ascontiguousarray(foot_yaw_rad[:, i])
-            leg_ik_rows(
-                np.ascontiguousarray(p_foot_m[:, i]), p_base, rot, yaw, foot_yaw_rad is not None,
-                g.p_yaw_trunk_m, g.p_roll_yaw_m, g.p_pitch_roll_m, g.thigh_m, g.shank_m,
-                g.p_foot_ankle_m, g.lower_rad, g.upper_rad, 1e-9, leg_q, reach,
-            )  # fmt: skip
-            q[:, self._leg_columns[i]] = leg_q
-            reachable &= reach
-        cz, sz = np.cos(0.5 * yaw_rad), np.sin(0.5 * yaw_rad)
-        ct, st = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-        q[:, 0:3] = p_base
-        q[:, 3], q[:, 4], q[:, 5], q[:, 6] = -sz * st, cz * st, sz * ct, cz * ct
-        return q, reachable
+            joints, reachable = sol.joint_pos_rad, sol.reachable
+        else:  # the compiled leg IK directly: no batching, dicts or nominal-pose tiling
+            n = p_base_m.shape[0]
+            p_base = np.ascontiguousarray(p_base_m)
+            rot = np.ascontiguousarray(rot)
+            joints = np.empty((n, self._nominal_joints.size))
+            joints[:] = self._nominal_joints
+            leg_q = np.empty((n, 5))
+            reach = np.empty(n, dtype=bool)
+            reachable = np.ones(n, dtype=bool)
+            no_yaw = np.zeros(n)
+            for i, f in enumerate(FEET):
+                g = self.geometries[f]
+                assert isinstance(g, LegGeometry)
+                yaw = no_yaw if foot_yaw_rad is None else np.ascontiguousarray(foot_yaw_rad[:, i])
+                leg_ik_rows(
+                    np.ascontiguousarray(p_foot_m[:, i]), p_base, rot, yaw,
+                    foot_yaw_rad is not None, g.p_yaw_trunk_m, g.p_roll_yaw_m, g.p_pitch_roll_m,
+                    g.thigh_m, g.shank_m, g.p_foot_ankle_m, g.lower_rad, g.upper_rad, 1e-9, leg_q,
+                    reach,
+                )  # fmt: skip
+                joints[:, self.robot.leg_joint_index[f]] = leg_q
+                reachable &= reach
+        return configurations(self, p_base_m, yaw_rad, pitch, joints), reachable
 
     def momentum(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(N, 6) centroidal momentum ``A_G(q) v`` (eq. 11) and (N, 3) CoM [m] of

@@ -259,14 +259,14 @@ class KDSubproblem:
     def _build_cost_diag(self) -> None:
         """Diagonal weights of eq. 18 plus the proximal term, and the linear-cost factors."""
         c = self.config
+        w_state, w_input = c.stage_weights()
         diag = np.zeros(self.n)  # weights W of sum_v W v^2 (P = 2 W)
-        diag[self._col_x[1:, :6]] = c.w_pose
-        diag[self._col_x[1:, 6:]] = c.w_momentum
-        diag[self._col_pc[1:]] = np.asarray(c.w_p_com) + c.reg_position
+        diag[self._col_x[1:]] = w_state[:NX]
+        diag[self._col_pc[1:]] = w_state[NX:]
         diag[self._col_pc[0]] = c.reg_position
-        diag[self._col_f] = c.w_force + c.reg_force
-        diag[self._col_tau] = c.w_moment + c.reg_moment
-        diag[self._col_pf] = np.asarray(c.w_p_foot) + c.reg_position
+        diag[self._col_f] = w_input[0]
+        diag[self._col_tau] = w_input[1]
+        diag[self._col_pf] = w_input[2]
         self._P = sp.diags(2.0 * diag, format="csc")
         # gradient factors of eq. 18 at the iterate (q = 2 W (value - reference))
         self._q_pose = -2.0 * np.asarray(c.w_pose)

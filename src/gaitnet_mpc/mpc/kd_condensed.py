@@ -40,7 +40,6 @@ the iterate, without forming the sparse QP, are in
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -111,21 +110,15 @@ class KDCondensed:
         c = self.config = config
         self.options = dict(daqp_options or {})
         self._mass, self._gravity = float(c.mass_kg), float(c.gravity_mps2)
-        # the sparse QP's P = 2 W and gradient factors (implicit_kd._build_cost_diag)
-        w_p_com = np.asarray(c.w_p_com, dtype=float)
-        self._p_state = 2.0 * np.concatenate(
-            [c.w_pose, c.w_momentum, w_p_com + c.reg_position]
-        ).astype(float)
+        # the sparse QP's P = 2 W and gradient factors (as implicit_kd._build_cost_diag)
+        w_state, w_input = c.stage_weights()
+        self._p_state, self._p_input = 2.0 * w_state, 2.0 * w_input
         w_p_foot = np.asarray(c.w_p_foot, dtype=float)
-        self._p_input = 2.0 * np.array(
-            [[c.w_force + c.reg_force] * 3, [c.w_moment + c.reg_moment] * 3,
-             w_p_foot + c.reg_position],
-        )  # fmt: skip
         self._q_input = 2.0 * np.array([[c.w_force] * 3, [c.w_moment] * 3, w_p_foot])
-        self._q_p_com = 2.0 * w_p_com
-        self._min_sep = _or_nan(c.min_foot_separation_m)
+        self._q_p_com = 2.0 * np.asarray(c.w_p_com, dtype=float)
+        self._min_sep = kernel.or_nan(c.min_foot_separation_m)
         self._sweep = max(c.toe_m, c.heel_m)
-        self._trust_com = _or_nan(c.trust_region_com_m)
+        self._trust_com = kernel.or_nan(c.trust_region_com_m)
 
     def condense(
         self,
@@ -175,11 +168,6 @@ class KDCondensed:
             native_status=f"daqp exit {exitflag}",
         )
         return sol, parts
-
-
-def _or_nan(value: float | None) -> float:
-    """``value``, or NaN (the kernels' "none") for None."""
-    return math.nan if value is None else float(value)
 
 
 __all__ = ["CondensedQP", "KDCondensed"]

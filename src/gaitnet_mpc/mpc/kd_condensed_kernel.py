@@ -32,6 +32,11 @@ _FREE_M = 1e3  # the sparse QP's "unbounded" row bound (the separation rows' upp
 _EQUALITY = 5  # DAQP's flag of an equality row (lower == upper)
 
 
+def or_nan(value: float | None) -> float:
+    """``value``, or NaN (the kernels' "none") for None."""
+    return math.nan if value is None else float(value)
+
+
 @njit(cache=True)
 def foot_bounds(
     contact: np.ndarray,

@@ -132,5 +132,18 @@ class KDConfig:
         of ``qp_backend``, overridden by ``qp_options``."""
         return {**BACKEND_OPTIONS.get(self.qp_backend, {}), **dict(self.qp_options)}
 
+    def stage_weights(self) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. 18's diagonal weights ``W`` with the proximal term (the QP's ``P = 2 W``):
+        (15,) on a stage's ``x_k = [H; l_G; k_G]`` and ``delta p_c,k`` (``k >= 1``), and
+        (3, 3) per axis on ``delta f``, ``delta tau``, ``delta p_f``."""
+        w_state = np.concatenate(
+            [self.w_pose, self.w_momentum, np.asarray(self.w_p_com) + self.reg_position]
+        ).astype(float)
+        w_input = np.array(
+            [[self.w_force + self.reg_force] * 3, [self.w_moment + self.reg_moment] * 3,
+             np.asarray(self.w_p_foot) + self.reg_position],
+        )  # fmt: skip
+        return w_state, w_input
+
 
 __all__ = ["BACKEND_OPTIONS", "QP_FORMS", "KDConfig"]

@@ -9,7 +9,6 @@ arrays of the right shapes (:class:`~gaitnet_mpc.errors.ConfigError` otherwise).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -123,7 +122,7 @@ class KDInputs:
         return condensed_kernel.foot_bounds(
             self.contact, it.p_foot, np.ascontiguousarray(self.p_foot_ref[:, :, 2]),
             self.p_foot_measured, has_box, box[0], box[1], mask, height_from_reference,
-            math.nan if trust_region_m is None else float(trust_region_m),
+            condensed_kernel.or_nan(trust_region_m),
         )  # fmt: skip
 
     def with_references(
