@@ -36,6 +36,7 @@ from gaitnet_mpc.errors import ConfigError, GaitNetMPCError
 from gaitnet_mpc.robots.spec import FEET
 
 __all__ = [
+    "TIME_EPS_S",
     "GaitHorizon",
     "GaitSchedule",
     "GaitScheduleConfig",
@@ -43,8 +44,9 @@ __all__ = [
     "StepRecord",
 ]
 
-#: Tolerance [s] for time comparisons (a tick landing 1e-12 s before a boundary crosses it).
-_TIME_EPS_S = 1e-9
+#: Tolerance [s] for time comparisons (a tick landing 1e-12 s before a boundary crosses it):
+#: a tick at ``t_s >= step_end - TIME_EPS_S`` starts the next step.
+TIME_EPS_S = 1e-9
 
 
 class StepDtLockedError(GaitNetMPCError, RuntimeError):
@@ -179,12 +181,12 @@ class GaitSchedule:
         if not _is_number(t_s) or not math.isfinite(t_s):
             raise ConfigError("t_s", t_s, "a finite time [s]")
         t = float(t_s)
-        if t < self._t_s - _TIME_EPS_S:
+        if t < self._t_s - TIME_EPS_S:
             raise ConfigError("t_s", t_s, f">= the schedule time {self._t_s!r} s (monotonic)")
         if t <= self._t_s:
             return 0
         started = 0
-        while t >= self.step_end_time_s - _TIME_EPS_S:
+        while t >= self.step_end_time_s - TIME_EPS_S:
             self._log.append(
                 StepRecord(
                     index=self._step_index,
@@ -321,7 +323,7 @@ class GaitSchedule:
     @property
     def stage_in_step(self) -> int:
         """Current MPC stage inside the step, 0 .. h'-1."""
-        k = math.floor((self.time_in_step_s + _TIME_EPS_S) / self._step_dt_s)
+        k = math.floor((self.time_in_step_s + TIME_EPS_S) / self._step_dt_s)
         return min(k, self.config.stages_per_step - 1)
 
     @property

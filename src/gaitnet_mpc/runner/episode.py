@@ -3,7 +3,8 @@
 The run folder that :func:`run_episode` writes (plots are made afterwards from these files
 by :mod:`gaitnet_mpc.results.plots`):
 
-* ``summary.json``: episode outcome and statistics (see :func:`_summarise`), without the
+* ``summary.json``: episode outcome and statistics (see
+  :meth:`~gaitnet_mpc.runner.loop.EpisodeLoop.summary`), without the
   wall-clock figures, which go to ``timing.json``
   (:func:`~gaitnet_mpc.results.rundir.split_timing`); the returned summary has both.
 * ``log.csv``: one row per control tick (:class:`EpisodeLog`).
@@ -38,12 +39,9 @@ import numpy as np
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import Controller
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.results.events import EventRecorder
-from gaitnet_mpc.results.io import write_atomic, write_json_atomic
-from gaitnet_mpc.results.rundir import SUMMARY, TIMING, split_timing
-from gaitnet_mpc.robots import FEET
-from gaitnet_mpc.runner.logs import H_COLS, EpisodeLog, TelemetryRecorder
-from gaitnet_mpc.sim.simulator import Simulator, tilt_rad
+from gaitnet_mpc.runner.loop import EpisodeLoop
+from gaitnet_mpc.runner.loop import ended_upright as ended_upright  # re-exported
+from gaitnet_mpc.sim.simulator import Simulator
 
 #: Video cameras: ``oblique`` (a higher follow camera, behind and to the side, that shows
 #: the feet on the terrain) and ``side`` (the robot model's ``track`` camera, level).
@@ -118,19 +116,6 @@ def _overlay_lines(t_s: float, command: Command, step_dt_s: float) -> list[str]:
     return [f"t = {t_s:6.2f} s", f"cmd vx = {command.vx_mps:+.2f} m/s", f"step dt = {dt}"]
 
 
-def ended_upright(
-    final_tilt_rad: float, final_com_height_m: float, com_height0_m: float, sim_config: Any
-) -> bool:
-    """Whether the episode ended upright: the fall detector's tilt and CoM-height measures
-    at half its margins, ``tilt <= fall_tilt_rad / 2`` and
-    ``h >= h0 (1 + fall_com_height_ratio) / 2`` (see the module docstring)."""
-    tilt_ok = final_tilt_rad <= 0.5 * sim_config.fall_tilt_rad
-    height_ok = final_com_height_m >= 0.5 * (1.0 + sim_config.fall_com_height_ratio) * (
-        com_height0_m
-    )
-    return bool(tilt_ok and height_ok)
-
-
 #: Marker colours (RGBA) of planned footholds, as the course colours: left blue, right red.
 _FOOT_RGBA = {"left": (0.15, 0.3, 0.9, 0.9), "right": (0.9, 0.15, 0.15, 0.9)}
 
@@ -152,33 +137,6 @@ def _draw_footholds(scene: Any, footholds: list[tuple[str, np.ndarray]], height_
             np.array(_FOOT_RGBA[foot], dtype=np.float32),
         )
         scene.ngeom += 1
-
-
-def _log_row(
-    state: Any,
-    cmd: Command,
-    tau: np.ndarray,
-    tau_limit: np.ndarray,
-    probe: TelemetryRecorder,
-    self_contact: bool,
-) -> np.ndarray:
-    """One row of :class:`EpisodeLog` (columns in its order)."""
-    tau_abs = np.abs(tau)
-    return np.concatenate(
-        [
-            [state.t_s],
-            state.com_world_m,
-            state.com_vel_world_mps,
-            state.base_rpy_rad,
-            [cmd.vx_mps],
-            [float(state.foot_contact[f]) for f in FEET],
-            [state.foot_wrench_world[f][2] for f in FEET],
-            state.h_measured,
-            [tau_abs.max(), (tau_abs / tau_limit).max()],
-            [probe.step_dt(), probe.last_qps, probe.last_ms, probe.stance_code()],
-            [float(self_contact)],
-        ]
-    )
 
 
 def run_episode(
@@ -205,17 +163,7 @@ def run_episode(
         on_step: called with ``sim`` after every physics step (e.g. to keep poses for a
             snapshot strip); it must not change the simulation.
     """
-    if not (np.isfinite(duration_s) and duration_s > 0):
-        raise ConfigError("--duration", duration_s, "a finite duration > 0 s")
-    n_ticks = round(duration_s / sim.config.timestep_s)
-    state = sim.state()
-    controller.reset(state)
-    com0 = state.com_world_m.copy()
-    com_height0_m = sim.com_height_m
-    log = EpisodeLog()
-    probe = TelemetryRecorder(controller)
-    events = EventRecorder()
-    tau_limit = np.maximum(sim.model.actuator_ctrlrange[:, 1].copy(), 1e-9)
+    loop = EpisodeLoop(sim, controller, command, duration_s)
     renderer, writer, frame_dt, next_frame_t = None, None, np.inf, 0.0
     overlay = False
     tmp_video = None
@@ -239,14 +187,8 @@ def run_episode(
     render_wall_s = 0.0
     interrupted = False
     try:
-        for tick in range(n_ticks):
-            state = sim.state()
-            tau = controller.compute(state)
-            probe.after_compute(state.t_s)
-            tel = probe.telemetry
-            events.update(state, None if tel is None else {tel.swing_foot: tel.step_end_s})
-            log.rows.append(_log_row(state, command, tau, tau_limit, probe, sim.self_contact))
-            sim.step(tau)
+        while not loop.done:
+            loop.tick()
             if on_step is not None:
                 on_step(sim)
             if renderer is not None and sim.time_s >= next_frame_t - 1e-9:
@@ -256,7 +198,7 @@ def run_episode(
                 _draw_footholds(renderer.scene, controller.planned_footholds(), foot_r)
                 frame = renderer.render()
                 if overlay:
-                    lines = _overlay_lines(sim.time_s, command, probe.step_dt())
+                    lines = _overlay_lines(sim.time_s, command, loop.probe.step_dt())
                     frame = overlay_text(frame, lines)
                 writer.append_data(frame)
                 render_wall_s += time.perf_counter() - t_r
@@ -270,10 +212,8 @@ def run_episode(
                 if ahead_s > 0:
                     time.sleep(ahead_s)
                 next_view_t += viewer_dt
-            if bar is not None and tick % 100 == 99:
+            if bar is not None and loop.ticks % 100 == 0:
                 _update_bar(bar, sim.time_s, time.perf_counter() - t_wall0)
-            if sim.fall.fell:
-                break
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -284,39 +224,13 @@ def run_episode(
         if renderer is not None:
             renderer.close()
     wall_s = time.perf_counter() - t_wall0
-    final = sim.state()
-    summary = _summarise(sim, controller, command, final, com0, log, wall_s, render_wall_s)
-    summary["interrupted"] = interrupted
-    summary["com_height0_m"] = com_height0_m
-    summary["ended_upright"] = ended_upright(
-        summary["final_tilt_rad"], summary["final_com_height_m"], com_height0_m, sim.config
-    )
-    summary["outcome"] = (
-        "interrupted"
-        if interrupted
-        else "fell"
-        if summary["fell"]
-        else "ok"
-        if summary["ended_upright"]
-        else "not_upright"
-    )
+    summary = loop.summary(wall_s, render_wall_s, interrupted)
     if video is not None:
         summary["video"] = {"camera": video.camera, "overlay": video.overlay, "fps": video.fps}
     if meta:
         summary = {**meta, **summary}
     if out_dir is not None:
-        out = Path(out_dir)
-        write_atomic(out / "log.csv", log.to_csv())
-        if probe.log is not None:
-            probe.log.fill_measured(np.asarray(log.rows).reshape(-1, len(log.columns)), H_COLS)
-            write_atomic(out / "mpc_log.csv", probe.log.to_csv())
-        write_atomic(out / "events.csv", events.to_csv())
-        write_json_atomic(out / "course.json", sim.course.to_dict())
-        if tmp_video is not None:
-            tmp_video.replace(out / "video.mp4")
-        facts, timing = split_timing(summary)
-        write_json_atomic(out / TIMING, timing)
-        write_json_atomic(out / SUMMARY, facts)
+        loop.write_files(Path(out_dir), summary, tmp_video)
     return summary
 
 
@@ -338,61 +252,3 @@ def _update_bar(bar: Any, sim_s: float, wall_s: float) -> None:
     """Move the bar to ``sim_s`` simulated seconds and show the real-time factor."""
     bar.set_postfix_str(f"RTF {sim_s / max(wall_s, 1e-9):.2f}", refresh=False)
     bar.update(round(sim_s, 3) - bar.n)
-
-
-def _summarise(
-    sim: Simulator,
-    controller: Controller,
-    command: Command,
-    final: Any,
-    com0: np.ndarray,
-    log: EpisodeLog,
-    wall_s: float,
-    render_wall_s: float,
-) -> dict[str, Any]:
-    """The ``summary.json`` fields.
-
-    ``fell`` / ``fall_time_s`` / ``fall_reason``: how the episode ended early; ``diverged``
-    is true when that was a numerical divergence of the simulation (reason ``"simulation
-    diverged: ..."``). ``self_collisions``: ticks with a contact between two robot geoms;
-    ``self_collision_first_t_s`` (null if none), ``self_collision_max_depth_m`` and
-    ``self_collision_pairs`` (sorted ``"bodyA/bodyB"``) describe them.
-    """
-    # (n, columns) even for n = 0: a run interrupted before its first tick was logged
-    rows = np.asarray(log.rows, dtype=float).reshape(len(log.rows), len(log.columns))
-    t = rows[:, 0]
-    sim_s = float(sim.time_s)
-    after_1s = t >= 1.0
-    if np.any(after_1s):
-        err = rows[after_1s, 4] - command.vx_mps
-        rmse = float(np.sqrt(np.mean(err**2)))
-    else:
-        rmse = None
-    distance = float(final.com_world_m[0] - com0[0])
-    stats = controller.mpc_stats
-    footholds = [f.to_dict() for f in sim.footholds]
-    return {
-        "duration_s": round(sim_s, 4),
-        "fell": sim.fall.fell,
-        "fall_time_s": sim.fall.t_s,
-        "fall_reason": sim.fall.reason or None,
-        "diverged": sim.diverged,
-        "distance_m": distance,
-        "lateral_drift_m": float(final.com_world_m[1] - com0[1]),
-        # how the episode ended: a run cut short by its duration can still end tilted
-        "final_tilt_rad": tilt_rad(final.base_rot_world),
-        "final_com_height_m": sim.com_height_m,
-        "mean_speed_mps": distance / sim_s if sim_s > 0 else 0.0,
-        "speed_rmse_mps": rmse,
-        "footholds": footholds,
-        "foothold_violations": sum(not f["allowed"] for f in footholds),
-        "step_durations_s": [round(x, 4) for x in controller.step_durations_s],
-        "mpc": None if stats is None else stats.summary(),
-        "dt_policy": controller.dt_policy_summary(),
-        "swing_events": controller.swing_events,
-        "wall_time_s": wall_s,
-        "render_time_s": render_wall_s,
-        "torque_limits_nm": sorted({float(x) for x in sim.model.actuator_ctrlrange[:, 1]}),
-        "realtime_factor": sim_s / wall_s if wall_s > 0 else None,
-        **sim.self_collisions.to_dict(),
-    }

@@ -160,6 +160,11 @@ class FallStatus:
     reason: str = ""
     diverged: bool = False
 
+    def __bool__(self) -> bool:
+        """True once the episode fell: ``if sim.fall:`` reads as it says (a dataclass
+        without this would be true always, even at t = 0)."""
+        return self.fell
+
 
 @dataclass
 class SelfCollisionStats:
