@@ -13,7 +13,7 @@ ROOT = Path(gaitnet_mpc.__file__).parent
 
 #: The layers, lowest first: a module may import its own layer's and lower layers' modules.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "geometry", "machine", "state"),
+    ("errors", "geometry", "jit", "machine", "state"),
     ("command", "config", "dt_policy", "parallel", "robots", "terrain"),
     ("dataset", "gait", "results", "sim"),
     ("kinematics",),
@@ -22,7 +22,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("control",),
     ("runner",),
     ("scenario",),
-    ("experiments", "table2"),
+    ("experiments", "table2", "envs"),
     ("cli",),
 )
 #: Longest source file without a stated reason [lines].

@@ -100,6 +100,8 @@ class Telemetry:
             touchdown) [s].
         prediction: the last plan's one-stage momentum prediction (None: no plan, or a
             controller whose MPC does not predict momentum).
+        heading_rad: the commanded trunk heading [rad] (Gait-Net's features are measured
+            in its frame, :func:`~gaitnet_mpc.dataset.step_features.step_features`).
     """
 
     step_dt_s: float
@@ -107,6 +109,7 @@ class Telemetry:
     swing_foot: str
     step_end_s: float
     prediction: MomentumPrediction | None
+    heading_rad: float = 0.0
 
 
 class Controller(ABC):

@@ -1,23 +1,33 @@
 """Build the dt policy of a kino-dynamic controller from its settings
 (:class:`~gaitnet_mpc.dt_policy.DtPolicyConfig`): a fixed dt, Gait-Net, the grid-search
 oracle or the dt of an NLP (``kd-optdt``), all behind
-:class:`~gaitnet_mpc.mpc.sequential.DtPolicy`."""
+:class:`~gaitnet_mpc.mpc.sequential.DtPolicy`; and :class:`ExternalDt`, the dt a caller
+sets before each step start (no setting names it: it is handed to the controller,
+``build_episode(..., dt_policy=...)``)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from gaitnet_mpc.dataset.protocol import STAGES_PER_STEP
-from gaitnet_mpc.dt_policy import NOMINAL_DT_S, DtPolicyConfig, oracle_grid_s
+from gaitnet_mpc.dt_policy import (
+    ACCEPTED_DT_RANGE_S,
+    NOMINAL_DT_S,
+    DtPolicyConfig,
+    oracle_grid_s,
+)
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.step_durations import StepDurations
 from gaitnet_mpc.gaitnet import WEIGHTS_DIR, WEIGHTS_FILE, GaitNet, default_weights_path
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.mpc.dt_nlp import NLPDt, NLPDtConfig
 from gaitnet_mpc.mpc.dt_oracle import OracleConfig, OracleDt
+from gaitnet_mpc.mpc.kd_iterate import KDIterate
 from gaitnet_mpc.mpc.sequential import (
     DtPolicy,
     FixedDt,
+    KDProblem,
     ScheduledDt,
     SequentialConfig,
     SequentialKDMPC,
@@ -121,3 +131,46 @@ def make_dt_policy(
     )
     oracle.attach(SequentialKDMPC(robot, sequential))
     return oracle
+
+
+class ExternalDt:
+    """The dt of each step set from outside: :attr:`dt_s` as the caller last set it, read
+    by every iteration of the step-start solve (Algorithm 1, line 8) as a fixed dt would
+    be. A caller that decides step by step (the Gymnasium environment's action,
+    :mod:`gaitnet_mpc.envs.gym_env`) sets it before the tick that starts the step; the
+    steps' dts it set are kept in :attr:`history_s`.
+
+    Args:
+        nominal_dt_s: ``dt^0`` of the first step and the value of :attr:`dt_s` until it
+            is set [s].
+    """
+
+    def __init__(self, nominal_dt_s: float = NOMINAL_DT_S) -> None:
+        self._nominal_dt_s = self._checked(nominal_dt_s, "nominal_dt_s")
+        self._dt_s = self._nominal_dt_s
+        self.history_s: list[float] = []
+
+    @staticmethod
+    def _checked(dt_s: float, name: str) -> float:
+        lo, hi = ACCEPTED_DT_RANGE_S
+        value = float(dt_s)
+        if not (math.isfinite(value) and lo <= value <= hi):
+            raise ConfigError(name, dt_s, f"a sampling time in [{lo}, {hi}] s")
+        return value
+
+    @property
+    def nominal_dt_s(self) -> float:
+        return self._nominal_dt_s
+
+    @property
+    def dt_s(self) -> float:
+        """The dt [s] the next step start takes."""
+        return self._dt_s
+
+    @dt_s.setter
+    def dt_s(self, value: float) -> None:
+        self._dt_s = self._checked(value, "dt_s")
+        self.history_s.append(self._dt_s)
+
+    def __call__(self, problem: KDProblem, iterate: KDIterate, dt_s: float) -> float:
+        return self._dt_s

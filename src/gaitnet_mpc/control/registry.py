@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gaitnet_mpc import config as configio
 from gaitnet_mpc.control.base import Controller
@@ -16,18 +16,27 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.terrain import Course
 
+if TYPE_CHECKING:
+    from gaitnet_mpc.mpc.sequential import DtPolicy
+
 
 @dataclass(frozen=True)
 class ControllerContext:
     """What a controller factory may use: the robot model, the course (handed to a walking
     controller only through a :class:`TerrainView`), the velocity command and the
     controller's settings (``KDWalkConfig``, ``SRBMWalkConfig``, ``WBWalkConfig``; None:
-    the defaults of :func:`controller_config`)."""
+    the defaults of :func:`controller_config`).
+
+    ``dt_policy``: a dt policy object that replaces the one the settings name
+    (``KDWalkConfig.dt_policy``), for the kd family only: a caller that chooses each
+    step's dt itself, e.g. :class:`~gaitnet_mpc.control.dt_policies.ExternalDt` of the
+    Gymnasium environment. None: the settings' policy."""
 
     robot: RobotModel
     course: Course
     command: Any
     config: Any = None
+    dt_policy: DtPolicy | None = None
 
 
 #: The controllers that are ``kd`` with another dt policy: the same settings and presets,
@@ -160,7 +169,9 @@ def _kd_family(name: str) -> Callable[[ControllerContext], Controller]:
 
         config = _config(name, ctx)
         terrain = walk_terrain(ctx.course, config)
-        return KDWalkController(ctx.robot, terrain, ctx.command, config=config)
+        return KDWalkController(
+            ctx.robot, terrain, ctx.command, dt_policy=ctx.dt_policy, config=config
+        )
 
     return make
 
@@ -186,4 +197,7 @@ CONTROLLERS: dict[str, Callable[[ControllerContext], Controller]] = {
 def make_controller(name: str, ctx: ControllerContext) -> Controller:
     if name not in CONTROLLERS:
         raise ConfigError("--controller", name, f"one of {sorted(CONTROLLERS)}")
+    if ctx.dt_policy is not None and name not in KD_FAMILY:
+        expected = f"None for {name} (only {', '.join(KD_FAMILY)} take a dt policy)"
+        raise ConfigError("dt_policy", type(ctx.dt_policy).__name__, expected)
     return CONTROLLERS[name](ctx)

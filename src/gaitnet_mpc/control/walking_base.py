@@ -75,6 +75,7 @@ class WalkingBase(Controller):
             swing_foot=sched.swing_foot,
             step_end_s=sched.step_start_time_s + sched.current_step_duration_s,
             prediction=self._prediction(),
+            heading_rad=self.profile.heading_rad(sched.time_s),
         )
 
     def _commanded_path_xy(self, t_s: float) -> np.ndarray:

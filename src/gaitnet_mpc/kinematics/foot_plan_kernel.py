@@ -3,7 +3,7 @@
 The foot targets of ``f_ref`` / ``f_IK`` along the horizon (the swing profile of
 :func:`gaitnet_mpc.gait.swing.swing_profile` and the minimum-jerk heading blend) and the
 footholds as means of the MPC's foot iterates, one row at a time in scalar arithmetic
-(numba, compiled on first use and cached beside this file): at ``h + 1 = 11`` rows and two
+(numba, compiled on first use, cached by :mod:`gaitnet_mpc.jit`): at ``h + 1 = 11`` rows and two
 feet these are a few microseconds instead of some thirty NumPy calls each.
 """
 
@@ -12,16 +12,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from gaitnet_mpc.jit import njit_cached
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _min_jerk(s: float) -> float:
     """``10 s^3 - 15 s^4 + 6 s^5``, as :func:`gaitnet_mpc.gait.swing.min_jerk`."""
     return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
 
 
-@njit(cache=True)
+@njit_cached()
 def plan_rows(
     stacked: np.ndarray,
     yaws: np.ndarray,
@@ -59,7 +60,7 @@ def plan_rows(
     return p_foot, yaw
 
 
-@njit(cache=True)
+@njit_cached()
 def foothold_means(
     p_iter: np.ndarray, on_ground: np.ndarray, rows: np.ndarray, stacked: np.ndarray
 ) -> np.ndarray:

@@ -5,7 +5,7 @@ public functions check and batch their inputs and call these kernels. Each kerne
 contiguous float64 arrays with one target per row and writes the clipped joint angles and
 the reachability into output arrays, one row at a time in scalar arithmetic: a leg IK of a
 few rows is then a few microseconds instead of the ~40 NumPy calls of the vectorised form
-(numba, compiled on first use and cached beside this file).
+(numba, compiled on first use, cached by :mod:`gaitnet_mpc.jit`).
 """
 
 from __future__ import annotations
@@ -13,21 +13,22 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from gaitnet_mpc.jit import njit_cached
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _clip(x: float, lo: float, hi: float) -> float:
     return min(max(x, lo), hi)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _wrap(a: float) -> float:
     """``a`` wrapped to ``(-pi, pi]`` as ``atan2(sin a, cos a)``."""
     return math.atan2(math.sin(a), math.cos(a))
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _two_link(
     bx: float, bz: float, thigh: float, shank: float, knee_lo: float, knee_hi: float
 ) -> tuple[float, float, float, float]:
@@ -46,7 +47,7 @@ def _two_link(
     return q_hip_raw, q_knee_raw, q_knee, cos_knee
 
 
-@njit(cache=True)
+@njit_cached()
 def leg_ik_rows(
     p_f: np.ndarray,
     p_b: np.ndarray,
@@ -115,7 +116,7 @@ def leg_ik_rows(
         reachable[i] = worst <= tol and abs(cos_knee) <= 1.0 + tol and excess >= 0.0
 
 
-@njit(cache=True)
+@njit_cached()
 def planar_leg_ik_rows(
     ax: np.ndarray,
     az: np.ndarray,

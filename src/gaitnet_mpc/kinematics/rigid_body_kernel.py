@@ -4,7 +4,7 @@
 the horizon, several times per sequential iteration. Pinocchio does it one configuration
 per call, and at ``h + 1 = 11`` boundaries the Python round trips cost more than the
 arithmetic. These kernels do the same forward pass over a kinematic tree for all rows in
-one call (numba, compiled on first use and cached beside this file):
+one call (numba, compiled on first use, cached by :mod:`gaitnet_mpc.jit`):
 
 * joint ``i`` moves relative to its parent's frame by the fixed placement ``(R_i, t_i)``
   and then by its own motion: a free-flyer (``q = [p, quaternion x y z w]``, ``v``
@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from numba import njit
+
+from gaitnet_mpc.jit import njit_cached
 
 _UNIVERSE, _FREE_FLYER = -1, 0  # kinds; 1, 2, 3: revolute about x, y, z
 _REVOLUTE = {"JointModelRX": 1, "JointModelRY": 2, "JointModelRZ": 3}
@@ -95,21 +96,21 @@ def tree_of(model: pin.Model) -> KinematicTree | None:
     )
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _mat_vec(m: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """``out = m x`` for 3 x 3 ``m`` (scalar loops: numba's ``@`` calls BLAS)."""
     for a in range(3):
         out[a] = m[a, 0] * x[0] + m[a, 1] * x[1] + m[a, 2] * x[2]
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _mat_t_vec(m: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """``out = m^T x`` for 3 x 3 ``m``."""
     for a in range(3):
         out[a] = m[0, a] * x[0] + m[1, a] * x[1] + m[2, a] * x[2]
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _mat_mat(m: np.ndarray, n: np.ndarray, out: np.ndarray) -> None:
     """``out = m n`` for 3 x 3 matrices."""
     for a in range(3):
@@ -117,7 +118,7 @@ def _mat_mat(m: np.ndarray, n: np.ndarray, out: np.ndarray) -> None:
             out[a, b] = m[a, 0] * n[0, b] + m[a, 1] * n[1, b] + m[a, 2] * n[2, b]
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _cross_add(a: np.ndarray, b: np.ndarray, scale: float, out: np.ndarray) -> None:
     """``out += scale (a x b)``."""
     out[0] += scale * (a[1] * b[2] - a[2] * b[1])
@@ -125,7 +126,7 @@ def _cross_add(a: np.ndarray, b: np.ndarray, scale: float, out: np.ndarray) -> N
     out[2] += scale * (a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True)
+@njit_cached()
 def _forward(
     q: np.ndarray,
     parent: np.ndarray,
@@ -183,7 +184,7 @@ def _forward(
         _mat_mat(rb, rj, r_out[i])
 
 
-@njit(cache=True)
+@njit_cached()
 def com_rows(
     q: np.ndarray,
     parent: np.ndarray,
@@ -213,7 +214,7 @@ def com_rows(
     return out
 
 
-@njit(cache=True)
+@njit_cached()
 def momentum_rows(
     q: np.ndarray,
     v: np.ndarray,

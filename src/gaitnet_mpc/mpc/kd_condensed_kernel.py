@@ -3,7 +3,7 @@
 :mod:`~gaitnet_mpc.mpc.kd_condensed` states the condensed QP and why it has the sparse
 QP's minimiser; these kernels build it straight from the iterate and the per-solve inputs
 (:class:`~gaitnet_mpc.mpc.kd_inputs.KDInputs`), stage by stage, in scalar loops (numba,
-compiled on first use and cached beside this file). The sparse QP of
+compiled on first use, cached by :mod:`gaitnet_mpc.jit`). The sparse QP of
 :mod:`~gaitnet_mpc.mpc.implicit_kd` is not formed: a QP is then about a tenth of a
 millisecond of arithmetic instead of a few hundred NumPy calls. Nothing here calls BLAS,
 so there are no BLAS threads to limit.
@@ -25,7 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from gaitnet_mpc.jit import njit_cached
 
 _NSX = 15  # condensed state per stage: x_k (12) and delta p_c,k (3)
 _FREE_M = 1e3  # the sparse QP's "unbounded" row bound (the separation rows' upper bound)
@@ -37,7 +38,7 @@ def or_nan(value: float | None) -> float:
     return math.nan if value is None else float(value)
 
 
-@njit(cache=True)
+@njit_cached()
 def foot_bounds(
     contact: np.ndarray,
     p_foot: np.ndarray,
@@ -114,7 +115,7 @@ def foot_bounds(
     return lo, hi
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _skew(v: np.ndarray, row: int, col: int) -> float:
     """Entry ``(row, col)`` of the cross-product matrix of the 3-vector ``v``."""
     if row == col:
@@ -126,7 +127,7 @@ def _skew(v: np.ndarray, row: int, col: int) -> float:
     return -v[1] if col == 0 else v[0]
 
 
-@njit(cache=True)
+@njit_cached()
 def _variables(
     contact: np.ndarray,
     f: np.ndarray,
@@ -177,7 +178,7 @@ def _variables(
     return idx, m_in, u_lo[:n_u], u_hi[:n_u], n_before, n_u
 
 
-@njit(cache=True)
+@njit_cached()
 def condense(
     dts: np.ndarray,
     contact: np.ndarray,
@@ -384,7 +385,7 @@ def condense(
     return hess, grad, rows, upper, lower, sense, idx, m_in, mm, mv
 
 
-@njit(cache=True)
+@njit_cached()
 def expand(
     u: np.ndarray, idx: np.ndarray, m_in: np.ndarray, mm: np.ndarray, mv: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

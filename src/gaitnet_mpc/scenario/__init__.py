@@ -13,7 +13,9 @@ file (:meth:`Scenario.from_toml`); :func:`run_scenario` writes it into the run f
 
 Every command that simulates builds its episodes here (:func:`build_episode`), so a
 benchmark, a data-collection set and ``gaitnet-mpc run`` with the same scenario run the
-same thing.
+same thing. :class:`EpisodeStepper` (``scenario/stepper.py``) runs the same loop in
+pieces (ticks or footsteps) for a caller that looks at the robot between them
+(``examples/step_loop.py``; the Gymnasium environment ``gaitnet_mpc.envs.gym_env``).
 
 TOML layout of ``scenario.toml``::
 
@@ -48,6 +50,7 @@ from gaitnet_mpc.scenario.run import (
     simulate_episode,
     write_scenario_files,
 )
+from gaitnet_mpc.scenario.stepper import EpisodeOverError, EpisodeStepper, StepResult
 
 __all__ = [
     "CONFIG_FILE",
@@ -55,7 +58,10 @@ __all__ = [
     "MIN_DURATION_S",
     "SCENARIO_FILE",
     "Episode",
+    "EpisodeOverError",
+    "EpisodeStepper",
     "Scenario",
+    "StepResult",
     "build_episode",
     "load_scenario_course",
     "make_scenario",

@@ -7,7 +7,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import tomli_w
 
@@ -28,6 +28,9 @@ from gaitnet_mpc.sim.cart import Cart
 from gaitnet_mpc.sim.disturbances import Push
 from gaitnet_mpc.sim.simulator import SimConfig, Simulator, check_payload
 from gaitnet_mpc.terrain import BUILTIN_COURSES, SEEDED_COURSES, Course, load_course
+
+if TYPE_CHECKING:
+    from gaitnet_mpc.mpc.sequential import DtPolicy
 
 #: Shortest and longest simulated time of a scenario [s]: one control tick, one hour.
 MIN_DURATION_S = 0.01
@@ -282,7 +285,9 @@ def load_scenario_course(scenario: Scenario) -> Course:
 @dataclass
 class Episode:
     """A scenario built: the robot, course, controller and simulator of one episode, for
-    callers that step the loop themselves (data collection, Table II recording)."""
+    callers that step the loop themselves (data collection, Table II recording; see
+    :class:`~gaitnet_mpc.scenario.stepper.EpisodeStepper` for a loop that records and
+    summarises as ``gaitnet-mpc run`` does)."""
 
     scenario: Scenario
     robot: RobotModel
@@ -296,7 +301,11 @@ class Episode:
 
 
 def build_episode(
-    scenario: Scenario, *, robot: RobotModel | None = None, sim_config: SimConfig | None = None
+    scenario: Scenario,
+    *,
+    robot: RobotModel | None = None,
+    sim_config: SimConfig | None = None,
+    dt_policy: DtPolicy | None = None,
 ) -> Episode:
     """The robot, course, controller and simulator of ``scenario``.
 
@@ -304,6 +313,10 @@ def build_episode(
         robot: an already loaded model of ``scenario.robot`` (saves the load); None: load.
         sim_config: simulator settings beyond the scenario's disturbances (fall margins);
             its ``payload_kg`` and ``pushes`` are replaced by the scenario's.
+        dt_policy: for the kd family, a dt policy object in place of the one the
+            scenario's settings name (e.g. :class:`~gaitnet_mpc.control.dt_policies.ExternalDt`,
+            whose dt the caller sets step by step); the scenario then no longer says
+            everything the episode does. None: the settings' policy.
     """
     if robot is None:
         robot = load_robot(scenario.robot)
@@ -311,7 +324,7 @@ def build_episode(
         raise ConfigError("robot", robot.name, f"a model of {scenario.robot}")
     check_payload(scenario.payload_kg, robot.total_mass_kg, "payload_kg")
     course = load_scenario_course(scenario)
-    ctx = ControllerContext(robot, course, scenario.command, scenario.config)
+    ctx = ControllerContext(robot, course, scenario.command, scenario.config, dt_policy)
     controller = make_controller(scenario.controller, ctx)
     sim_config = replace(
         sim_config or SimConfig(),
