@@ -37,7 +37,7 @@ def njit_cached(**options: Any) -> Callable[[Callable[..., Any]], Any]:
                 "or in the user's cache folder): compiled kernels are not kept between runs; "
                 "set NUMBA_CACHE_DIR to a writable folder to keep them",
                 RuntimeWarning,
-                stacklevel=2,
+                stacklevel=1,  # one location: shown once, not once per kernel
             )
             return njit(cache=False, **options)(func)
 
