@@ -37,9 +37,17 @@ def walking_kd_config() -> KDConfig:
     kg m^2/s) instead of swaying, and the robot tipped over within 0.7 s. Weighting the
     angular pose and momentum 10x more and the linear pose and lateral CoM less keeps the
     trunk upright; the robot then steps in place and walks (see the issue notes).
+
+    Roll and pitch take 3x that (6000): read as angles, ``w I_G^2`` with the standing
+    centroidal inertia (0.64, 0.58 kg m^2), about 2500 and 2000 per rad^2. With 2000 the plan
+    brakes a push by pitching the trunk (+0.58 rad before the next touchdown after 100 N
+    forward) and tips on seeded stones; chosen with the low level's trunk feedback
+    (``walking_low_level_config``) on tuning seeds, docs/design/trunk_attitude.md. Yaw
+    stays at 2000 (18 per rad^2): the stance hip-yaw feedback holds the heading, and 100x
+    more in the MPC changed nothing on the probe.
     """
     return KDConfig(
-        w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0),
+        w_pose=(1.0, 1.0, 1.0, 6000.0, 6000.0, 2000.0),
         w_momentum=(10.0, 10.0, 10.0, 100.0, 100.0, 100.0),
         w_p_com=(10.0, 1.0, 250.0),
         # The sub-problem checks its inputs itself; skip the QP layer's second check.
@@ -58,9 +66,19 @@ def walking_low_level_config() -> LowLevelConfig:
       and fell at 9.6 s; with both it ran the 20 s (speed RMSE 0.010 m/s). With the
       feet beside the CoM (LIP reference) sagittal forces yaw the trunk (rms 0.35 rad
       on flat without the feedback, 0.10 rad with it).
+    * Trunk roll / pitch feedback on the stance hip roll / pitch (kp 20 N m/rad, kd 2 N m
+      s/rad). Nothing else in the loop holds the trunk's attitude: the MPC tracks the
+      centroidal momentum, whose angular part mixes the trunk's rotation with the legs',
+      and the stance legs map its wrench by ``J^T``. Traced on seeded stones (kd, seed
+      101): the trunk rolled to -0.23 rad over four steps before it fell. Chosen with the
+      MPC's roll / pitch weight (``walking_kd_config``), docs/design/trunk_attitude.md.
     """
     return LowLevelConfig(
-        swing_accel_ff=0.75, stance_yaw_kp_nm_per_rad=10.0, stance_yaw_kd_nms_per_rad=1.0
+        swing_accel_ff=0.75,
+        stance_yaw_kp_nm_per_rad=10.0,
+        stance_yaw_kd_nms_per_rad=1.0,
+        stance_tilt_kp_nm_per_rad=20.0,
+        stance_tilt_kd_nms_per_rad=2.0,
     )
 
 
@@ -133,9 +151,11 @@ class KDWalkConfig:
     # Tuning seeds 100-109, stone layouts clean for gaitnet: 1/10 with 0.2 m (0.08 m across),
     # 4/10 with 0.3 m alone; with a 0.04 m lateral margin 0.25 / 0.3 / 0.35 m gave 3 / 6 / 6.
     foothold_reach_m: float = bounded(0.3, "[0, 1] m", "a distance", "1 m is past any step")
-    # ... and behind the CoM at touchdown (None: foothold_reach_m).
+    # ... and behind the CoM at touchdown (None: foothold_reach_m). 0.05: the rule no
+    # longer picks the stone the foot already stands on, 0.13 m behind the CoM at
+    # touchdown, after which the trunk pitched forward and fell (docs/design/stone_failures.md).
     foothold_reach_back_m: float | None = bounded(
-        None, "[0, 1] m", "a distance", "None: the same as foothold_reach_m"
+        0.05, "[0, 1] m", "a distance", "None: the same as foothold_reach_m"
     )
     # swing targets end this far below the planned foothold
     touchdown_depth_m: float = bounded(0.003, DEPTH_INTERVAL, "a depth", DEPTH_REASON)
