@@ -48,8 +48,20 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
 
 def _default_walk_config(planar: bool) -> KDWalkConfig:
     """The default preset: ``KDWalkConfig()``; on a planar robot with the biped's foothold
-    margin (its 0.02 m point foot + 5 mm, kd-default.planar.toml)."""
-    return replace(KDWalkConfig(), foothold_margin_m=0.025) if planar else KDWalkConfig()
+    margin (its 0.02 m point foot + 5 mm) and without the humanoid's trunk settings
+    (roll / pitch pose weight 6000, trunk roll / pitch feedback; kd-default.planar.toml)."""
+    config = KDWalkConfig()
+    if not planar:
+        return config
+    kd = replace(config.sequential.kd, w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0))
+    return replace(
+        config,
+        foothold_margin_m=0.025,
+        sequential=replace(config.sequential, kd=kd),
+        low_level=replace(
+            config.low_level, stance_tilt_kp_nm_per_rad=0.0, stance_tilt_kd_nms_per_rad=0.0
+        ),
+    )
 
 
 @pytest.mark.parametrize("planar", [False, True])

@@ -151,11 +151,11 @@ class KDWalkConfig:
     # Tuning seeds 100-109, stone layouts clean for gaitnet: 1/10 with 0.2 m (0.08 m across),
     # 4/10 with 0.3 m alone; with a 0.04 m lateral margin 0.25 / 0.3 / 0.35 m gave 3 / 6 / 6.
     foothold_reach_m: float = bounded(0.3, "[0, 1] m", "a distance", "1 m is past any step")
-    # ... and behind the CoM at touchdown (None: foothold_reach_m). 0.05: the rule no
-    # longer picks the stone the foot already stands on, 0.13 m behind the CoM at
-    # touchdown, after which the trunk pitched forward and fell (docs/design/stone_failures.md).
+    # ... and behind the CoM at touchdown (None: foothold_reach_m). 0.05 kept the rule from
+    # re-stepping onto the stone behind (docs/design/stone_failures.md) but forced a step
+    # beyond the leg's reach before the built-in gap (docs/design/trunk_attitude.md).
     foothold_reach_back_m: float | None = bounded(
-        0.05, "[0, 1] m", "a distance", "None: the same as foothold_reach_m"
+        None, "[0, 1] m", "a distance", "None: the same as foothold_reach_m"
     )
     # swing targets end this far below the planned foothold
     touchdown_depth_m: float = bounded(0.003, DEPTH_INTERVAL, "a depth", DEPTH_REASON)

@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -40,6 +41,9 @@ from gaitnet_mpc.mpc.sequential import (
 )
 from gaitnet_mpc.robots import FEET
 from gaitnet_mpc.state import RobotState
+
+if TYPE_CHECKING:
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 
 #: Format version written into every file (key ``"format"``); 2 added ``"cop_fraction"``.
 FORMAT_VERSION = 2
@@ -155,15 +159,35 @@ class Recording:
     cop_fraction: float
 
 
+def table2_walk_config(cop_fraction: float) -> KDWalkConfig:
+    """``kd``'s settings as Table II's problems were recorded and are solved: the
+    recording's ``cop_fraction``, and the trunk settings from before
+    ``docs/design/trunk_attitude.md`` (angular centroidal-pose weight 2000 on all three axes,
+    no trunk roll / pitch feedback), so that ``benchmarks/results/table2.md`` stays
+    reproducible. Those settings change the states the walk visits and the angular
+    weights of every problem: with roll / pitch 6000, AD(3) meets Table X's step test on
+    none of the first three problems of a 0.6 s flat walk."""
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+
+    config = KDWalkConfig(cop_fraction=cop_fraction)
+    kd = replace(config.sequential.kd, w_pose=(1.0, 1.0, 1.0, 2000.0, 2000.0, 2000.0))
+    low_level = replace(
+        config.low_level, stance_tilt_kp_nm_per_rad=0.0, stance_tilt_kd_nms_per_rad=0.0
+    )
+    return replace(config, sequential=replace(config.sequential, kd=kd), low_level=low_level)
+
+
 def record_run(spec: RecordingSpec, robot_name: str = "humanoid3d") -> Recording:
     """Walk ``spec.course`` with the ``kd`` controller, its solver replaced by a
     :class:`RecordingKDMPC` (stops early at a fall)."""
     from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
+    from gaitnet_mpc.control.kd_walk_config import preview_walk_config
     from gaitnet_mpc.dt_policy import DtPolicyConfig
     from gaitnet_mpc.scenario import Scenario, build_episode
 
-    config = KDWalkConfig(cop_fraction=spec.cop_fraction, dt_policy=DtPolicyConfig(dt_s=spec.dt_s))
+    config = replace(
+        table2_walk_config(spec.cop_fraction), dt_policy=DtPolicyConfig(dt_s=spec.dt_s)
+    )
     config = preview_walk_config(config) if spec.preview else config
     scenario = Scenario(
         robot=robot_name,
@@ -436,16 +460,13 @@ def kd_solver(
     (robot mass, line-foot lengths, foot separation; :class:`FixedDt` of ``dt_s``), with
     the recording's ``cop_fraction`` (:attr:`RecordedProblem.cop_fraction`)."""
     from gaitnet_mpc.control.kd_walk import KDWalkController
-    from gaitnet_mpc.control.kd_walk_config import (
-        KDWalkConfig,
-        walk_terrain,
-    )
+    from gaitnet_mpc.control.kd_walk_config import walk_terrain
     from gaitnet_mpc.mpc.sequential import FixedDt
     from gaitnet_mpc.robots import load_robot
     from gaitnet_mpc.terrain import load_course
 
     robot = load_robot(robot_name)
-    config = KDWalkConfig(cop_fraction=cop_fraction)
+    config = table2_walk_config(cop_fraction)
     ctrl = KDWalkController(
         robot, walk_terrain(load_course("flat"), config), Command(), FixedDt(dt_s), config
     )
