@@ -146,6 +146,11 @@ class LowLevelController:
         tau = np.zeros(r.n_joints)
         qj, qdj = state.joint_pos_rad, state.joint_vel_radps
         lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        tilt = None  # the trunk-tilt feedback's torques per stance leg, made once per tick
+        if stance_wrench and (
+            c.stance_tilt_kp_nm_per_rad > 0.0 or c.stance_tilt_kd_nms_per_rad > 0.0
+        ):
+            tilt = self._tilt_torque(state) / len(stance_wrench)
         for foot, wrench in stance_wrench.items():
             idx = r.leg_joint_index[foot]
             jac = pin.getFrameJacobian(model, data, r.pin_foot_frame_ids[foot], lwa)
@@ -160,8 +165,7 @@ class LowLevelController:
                     c.stance_yaw_kp_nm_per_rad * err
                     + c.stance_yaw_kd_nms_per_rad * state.base_ang_vel_world_radps[2]
                 )
-            if c.stance_tilt_kp_nm_per_rad > 0.0 or c.stance_tilt_kd_nms_per_rad > 0.0:
-                tilt = self._tilt_torque(state) / len(stance_wrench)
+            if tilt is not None:
                 for axis, j in self.tilt_joints[foot]:
                     tau[j] += tilt[axis]
         if swing_target:
@@ -219,8 +223,11 @@ class LowLevelController:
         ``tau = kp [roll, pitch] + kd [roll rate, pitch rate]`` pushes the trunk upright.
         """
         c = self.config
-        roll, pitch, yaw = state.base_rpy_rad
-        cy, sy = np.cos(yaw), np.sin(yaw)
+        r = state.base_rot_world  # roll, pitch, yaw as RobotState.base_rpy_rad, in scalars
+        pitch = -math.asin(min(max(r[2, 0], -1.0), 1.0))
+        roll = math.atan2(r[2, 1], r[2, 2])
+        yaw = math.atan2(r[1, 0], r[0, 0])
+        cy, sy = math.cos(yaw), math.sin(yaw)
         w = state.base_ang_vel_world_radps
         rate = np.array([cy * w[0] + sy * w[1], -sy * w[0] + cy * w[1]])  # heading frame
         return c.stance_tilt_kp_nm_per_rad * np.array([roll, pitch]) + (
