@@ -99,7 +99,7 @@ def test_nonfinite_torque_is_counted_apart(
             "tau_nm", [float("nan")], "finite torques (a controller produced NaN/inf)"
         )
 
-    monkeypatch.setattr(soak, "simulate", nan_torques)
+    monkeypatch.setattr(soak.worker, "simulate", nan_torques)  # what run_spec calls
     settings = soak.DrawSettings(seed=0, controllers=("kd",), max_duration_s=0.05)
     record = soak.run_spec(soak.draw_episode(settings, 0).to_dict())
 
@@ -119,10 +119,10 @@ def test_solve_counts_read_the_failed_solves_of_the_mpc_stats(soak: ModuleType) 
     stats.record(0.0, 5, False, False)  # unconverged, but a plan (and no solve time)
     stats.record(0.002, 1, False, True, failed=True)
 
-    counts = soak._solve_counts(SimpleNamespace(mpc_stats=stats))
+    counts = soak.worker._solve_counts(SimpleNamespace(mpc_stats=stats))
 
     assert counts == {"solves": 3, "unconverged": 2, "qp_failures": 1}
-    assert soak._solve_counts(None) == {"solves": 0, "unconverged": 0, "qp_failures": 0}
+    assert soak.worker._solve_counts(None) == {"solves": 0, "unconverged": 0, "qp_failures": 0}
 
 
 def test_long_profile_draws_20_s_on_seeded_courses_with_pushes(soak: ModuleType) -> None:
