@@ -43,8 +43,8 @@ def walking_kd_config() -> KDConfig:
     brakes a push by pitching the trunk (+0.58 rad before the next touchdown after 100 N
     forward) and tips on seeded stones; chosen with the low level's trunk feedback
     (``walking_low_level_config``) on tuning seeds, docs/design/trunk_attitude.md. Yaw
-    stays at 2000 (18 per rad^2): the stance hip-yaw feedback holds the heading, and 100x
-    more in the MPC changed nothing on the probe.
+    stays at 2000 (18 per rad^2): the stance hip-yaw feedback holds the heading, and 110x
+    more in the MPC was no better on the probe.
     """
     return KDConfig(
         w_pose=(1.0, 1.0, 1.0, 6000.0, 6000.0, 2000.0),
