@@ -11,7 +11,7 @@ tick; split, each would walk it again.)
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
@@ -302,6 +302,18 @@ class Simulator:
     def diverged(self) -> bool:
         """Whether the simulation diverged (which also ended the episode as a fall)."""
         return self.fall.diverged
+
+    def set_pushes(self, pushes: tuple[Push, ...]) -> None:
+        """Replace the pushes to come, e.g. in a copy of an episode that was simulated
+        without them (:mod:`~gaitnet_mpc.experiments.forked_episode`). Each must start
+        after the last step already simulated began (the current time less a timestep):
+        a push would have acted on that step."""
+        last_step_s = self.time_s - self.config.timestep_s
+        for i, push in enumerate(pushes):
+            if push.t_s <= last_step_s + 1e-9:
+                expected = f"a start after {last_step_s:.6g} s (the last step simulated)"
+                raise ConfigError(f"pushes[{i}].t_s", push.t_s, expected)
+        self.config = replace(self.config, pushes=tuple(pushes))
 
     def step(self, tau_nm: np.ndarray) -> None:
         """Apply joint torques (saturated at the limits) for one timestep.
