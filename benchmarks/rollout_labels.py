@@ -49,7 +49,7 @@ def draw(seed: int) -> dict[str, Any]:
     }
 
 
-def run_episode(item: tuple[dict[str, Any], float, float]) -> dict[str, Any]:
+def run_episode(item: tuple[dict[str, Any], float, float, str | None]) -> dict[str, Any]:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from gaitnet_mpc.control.dt_policies import make_dt_policy
     from gaitnet_mpc.experiments.dt_rollouts import RolloutDt, drive
@@ -58,18 +58,24 @@ def run_episode(item: tuple[dict[str, Any], float, float]) -> dict[str, Any]:
     from gaitnet_mpc.scenario import build_episode, make_scenario
     from gaitnet_mpc.sim.disturbances import Push
 
-    d, window_s, horizon_s = item
+    d, window_s, horizon_s, weights = item
     t0 = time.perf_counter()
     a = math.radians(d["angle_deg"])
     f = d["force_n"]
     push = Push(d["t_push_s"], (f * math.cos(a), f * math.sin(a), 0.0), 0.2)
     duration = d["t_push_s"] + 0.2 + window_s + horizon_s
     scenario = make_scenario(
-        controller="gaitnet", vx_mps=d["speed_mps"], duration_s=duration, pushes=(push,)
+        controller="gaitnet",
+        vx_mps=d["speed_mps"],
+        duration_s=duration,
+        pushes=(push,),
+        gaitnet_weights=weights,
     )
     robot = load_robot("humanoid3d")
     inner = make_dt_policy(scenario.config.dt_policy, robot, scenario.config.sequential)
-    lo, hi = d["t_push_s"] - 0.05, d["t_push_s"] + window_s
+    lo, hi = d["t_push_s"] - 0.05, d["t_push_s"] + window_s  # window 0: no oracle
+    if window_s <= 0:
+        lo, hi = np.inf, -np.inf
     policy = RolloutDt(inner, lambda t: lo <= t <= hi, horizon_s)
     episode = build_episode(scenario, robot=robot, dt_policy=policy)
     loop = EpisodeLoop(episode.sim, episode.controller, scenario.command, duration)
@@ -101,6 +107,10 @@ def main() -> None:
     ap.add_argument("--window", type=float, default=0.8, help="s after the push")
     ap.add_argument("--horizon", type=float, default=1.5, help="s of each rollout")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--weights", default=None, help="the student's Gait-Net weights")
+    ap.add_argument(
+        "--no-oracle", action="store_true", help="only the student: its falls, no labels"
+    )
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
     if args.first_seed < 100:
@@ -110,16 +120,18 @@ def main() -> None:
     if args.out.exists():
         done = {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line}
     todo = [
-        (draw(s), args.window, args.horizon)
+        (draw(s), 0.0 if args.no_oracle else args.window, args.horizon, args.weights)
         for s in range(args.first_seed, args.first_seed + args.episodes)
         if s not in done
     ]
     print(f"{len(todo)} episodes to run ({len(done)} done)", file=sys.stderr)
+    fell = 0
     ctx = multiprocessing.get_context("fork")
     with ctx.Pool(args.workers, maxtasksperchild=10) as pool:
         for i, rec in enumerate(pool.imap_unordered(run_episode, todo), 1):
             with args.out.open("a") as fh:  # one whole line per episode
                 fh.write(json.dumps(rec) + "\n")
+            fell += rec["fell"]
             labels = sum(s["label_dt_s"] is not None for s in rec["steps"])
             changed = sum(s["label_dt_s"] not in (None, s["own_dt_s"]) for s in rec["steps"])
             print(
@@ -129,6 +141,7 @@ def main() -> None:
                 f"{rec['wall_s']} s",
                 file=sys.stderr,
             )
+    print(f"{fell} of {len(todo)} new episodes fell", file=sys.stderr)
 
 
 if __name__ == "__main__":
