@@ -105,14 +105,14 @@ class WhatIfDt:
 
 
 def run_case(controller: str, direction: str, phase: float, force_n: float, speed: float) -> dict:
-    name, dt_s, preset = parse_controller(controller)
+    name, dt_s, preset, weights = parse_controller(controller)
     t_push = push_time_s(controller, 3.0, phase)
     duration = t_push + PUSH_DURATION_S + 3.0
     angle = math.radians(DIRECTIONS[direction])
     push = Push(t_push, (force_n * math.cos(angle), force_n * math.sin(angle), 0.0), 0.2)
     scenario = make_scenario(
         controller=name, preset=preset, vx_mps=speed, duration_s=duration, pushes=(push,),
-        dt_s=dt_s,
+        dt_s=dt_s, gaitnet_weights=weights,
     )  # fmt: skip
     robot = load_robot("humanoid3d")
     config = scenario.config

@@ -5,7 +5,7 @@ The DAgger rows are grouped into ``--groups`` sets by episode seed, so that the 
 set (validation for early stopping, test for the report) holds out whole episodes.
 
     .venv/bin/python benchmarks/train_dagger.py --data data/gaitnet-kd-humanoid3d \
-        --labels data/rollout-labels/episodes.jsonl --out runs/gaitnet-dagger
+        --labels data/rollout-labels/episodes.jsonl [round2.jsonl ...] --out runs/gaitnet-dagger
 """
 
 from __future__ import annotations
@@ -48,15 +48,18 @@ def dagger_rows(path: Path, groups: int) -> tuple[np.ndarray, np.ndarray, np.nda
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", type=Path, required=True)
-    ap.add_argument("--labels", type=Path, required=True)
+    ap.add_argument("--labels", type=Path, nargs="+", required=True, help="DAgger rounds")
     ap.add_argument("--groups", type=int, default=5)
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
     base = load_dataset(args.data)
-    x, y, sets, counts = dagger_rows(args.labels, args.groups)
-    sha = hashlib.sha256(
-        (base.manifest_sha256 + hashlib.sha256(args.labels.read_bytes()).hexdigest()).encode()
-    ).hexdigest()
+    parts = [dagger_rows(p, args.groups) for p in args.labels]
+    x = np.vstack([p[0] for p in parts])
+    y = np.concatenate([p[1] for p in parts])
+    sets = np.concatenate([p[2] for p in parts])
+    counts = {k: sum(p[3][k] for p in parts) for k in parts[0][3]}
+    digests = [hashlib.sha256(p.read_bytes()).hexdigest() for p in args.labels]
+    sha = hashlib.sha256("".join([base.manifest_sha256, *digests]).encode()).hexdigest()
     data = GaitData(
         x=np.vstack([base.x, x]),
         y=np.concatenate([base.y, y]),

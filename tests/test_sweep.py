@@ -112,6 +112,9 @@ def test_controller_specs_carry_a_dt_and_a_preset() -> None:
     assert parse_controller("kd@0.055") == ControllerSpec("kd", 0.055, None)
     assert parse_controller("kd@0.045+realtime") == ControllerSpec("kd", 0.045, "realtime")
     assert parse_controller("gaitnet+realtime") == ControllerSpec("gaitnet", None, "realtime")
+    assert parse_controller("gaitnet:humanoid3d-dagger+realtime") == ControllerSpec(
+        "gaitnet", None, "realtime", "humanoid3d-dagger"
+    )
 
 
 def test_a_part_of_the_push_grid() -> None:

@@ -37,8 +37,9 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--controllers",
         default=None,
-        help=f"comma-separated, NAME[@DT][+PRESET]: a fixed MPC dt [s] and a preset, e.g. "
-        f"kd@0.055 or gaitnet+realtime "
+        help=f"comma-separated, NAME[@DT][:WEIGHTS][+PRESET]: a fixed MPC dt [s], Gait-Net "
+        f"weights (a shipped name or a path) and a preset, e.g. kd@0.055, "
+        f"gaitnet:humanoid3d-dagger or gaitnet+realtime "
         f"(default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
     )
     s.add_argument(

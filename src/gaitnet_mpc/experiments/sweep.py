@@ -91,15 +91,17 @@ class SweepSettings:
         if not self.controllers or len(set(self.controllers)) != len(self.controllers):
             raise ConfigError("--controllers", ",".join(self.controllers), "distinct names")
         for spec in self.controllers:
-            name, dt, _ = parse_controller(spec)
-            if name not in CONTROLLERS:
+            c = parse_controller(spec)
+            if c.name not in CONTROLLERS:
                 raise ConfigError(
                     "--controllers",
                     spec,
-                    f"names among {sorted(CONTROLLERS)} (NAME[@DT][+PRESET])",
+                    f"names among {sorted(CONTROLLERS)} (NAME[@DT][:WEIGHTS][+PRESET])",
                 )
-            if dt is not None and name not in ("kd", "srbm", "wbmpc", "oracle"):
+            if c.dt_s is not None and c.name not in ("kd", "srbm", "wbmpc", "oracle"):
                 raise ConfigError("--controllers", spec, "@DT only for a fixed-dt controller")
+            if c.weights is not None and c.name != "gaitnet":
+                raise ConfigError("--controllers", spec, ":WEIGHTS only for gaitnet")
         if isinstance(self.seeds, bool) or not (isinstance(self.seeds, int) and self.seeds >= 1):
             raise ConfigError("--seeds", self.seeds, "an integer >= 1")
         if self.speeds_mps is not None and not (
@@ -144,9 +146,15 @@ def check_inputs(settings: SweepSettings, folder: Path) -> Path:
 
     folder = check_output_path(folder, "--out")
     for spec in settings.controllers:
-        name, dt, preset = parse_controller(spec)
+        c = parse_controller(spec)
         try:
-            make_scenario(controller=name, dt_s=dt, preset=preset, duration_s=1.0)
+            make_scenario(
+                controller=c.name,
+                dt_s=c.dt_s,
+                preset=c.preset,
+                gaitnet_weights=c.weights,
+                duration_s=1.0,
+            )
         except ConfigError as exc:
             raise ConfigError("--controllers", spec, f"a valid controller ({exc})") from None
     return folder

@@ -141,32 +141,37 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
 
 
 class ControllerSpec(NamedTuple):
-    """A sweep's controller: a registry name, an optional fixed dt [s] and preset."""
+    """A sweep's controller: a registry name, an optional fixed dt [s], preset and Gait-Net
+    weights."""
 
     name: str
     dt_s: float | None = None
     preset: str | None = None
+    weights: str | None = None
 
 
 def parse_controller(spec: str) -> ControllerSpec:
     """``kd@0.055+realtime`` -> (``kd``, 0.055, ``realtime``): a registry name, an optional
     fixed dt [s] and an optional preset (as ``gaitnet-mpc run --dt 0.055 --preset
-    realtime``); ``gaitnet+realtime`` has no dt."""
+    realtime``); ``gaitnet+realtime`` has no dt; ``gaitnet:humanoid3d-dagger`` names the
+    Gait-Net weights (as ``--gaitnet-weights``: a shipped name or a path without ``+``)."""
     from gaitnet_mpc.errors import ConfigError
 
+    form = "NAME[@DT][:WEIGHTS][+PRESET]"
     rest, plus, preset = spec.partition("+")
     if plus and not preset:
-        raise ConfigError("--controllers", spec, "NAME[@DT][+PRESET] with a preset name")
+        raise ConfigError("--controllers", spec, f"{form} with a preset name")
+    rest, colon, weights = rest.partition(":")
+    if colon and not weights:
+        raise ConfigError("--controllers", spec, f"{form} with weights after ':'")
     name, sep, dt = rest.partition("@")
     value = None
     if sep:
         try:
             value = float(dt)
         except ValueError:
-            raise ConfigError(
-                "--controllers", spec, "NAME[@DT][+PRESET] with DT a number [s]"
-            ) from None
-    return ControllerSpec(name, value, preset or None)
+            raise ConfigError("--controllers", spec, f"{form} with DT a number [s]") from None
+    return ControllerSpec(name, value, preset or None, weights or None)
 
 
 def make_cases(mode: str, controllers: tuple[str, ...], plan: ModePlan) -> list[dict[str, Any]]:
@@ -260,14 +265,15 @@ def _build(controller: str, *, vx_mps: float, duration_s: float, **scenario: Any
     arguments (pushes, payload, course)."""
     from gaitnet_mpc.scenario import build_episode, make_scenario
 
-    name, dt_s, preset = parse_controller(controller)
+    spec = parse_controller(controller)
     return build_episode(
         make_scenario(
-            controller=name,
-            preset=preset,
+            controller=spec.name,
+            preset=spec.preset,
+            gaitnet_weights=spec.weights,
             vx_mps=vx_mps,
             duration_s=duration_s,
-            dt_s=dt_s,
+            dt_s=spec.dt_s,
             **scenario,
         )
     )
