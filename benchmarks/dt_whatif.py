@@ -23,85 +23,23 @@ import platform
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import mujoco
 import numpy as np
 
 from gaitnet_mpc.control.dt_policies import make_dt_policy
+from gaitnet_mpc.experiments.dt_rollouts import CANDIDATES_S, RolloutDt, drive
 from gaitnet_mpc.experiments.sweep_cases import (
     DIRECTIONS,
     PUSH_DURATION_S,
     parse_controller,
     push_time_s,
 )
-from gaitnet_mpc.mpc.sequential import KDProblem
 from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.runner.loop import EpisodeLoop
 from gaitnet_mpc.scenario import build_episode, make_scenario
 from gaitnet_mpc.sim.disturbances import Push
-
-CANDIDATES_S = (0.035, 0.04, 0.045, 0.05, 0.055, 0.06, 0.065, 0.07)
-
-
-class WhatIfDt:
-    """A dt policy around ``inner``: at step starts in ``window_s`` it forks one child per
-    candidate dt, each child forced to that dt for this step; ``outcomes`` collects, per
-    step start, the candidates' outcomes (parent only)."""
-
-    def __init__(self, inner: Any, window_s: tuple[float, float]) -> None:
-        self.inner = inner
-        self.window_s = window_s
-        self.forced_dt_s: float | None = None
-        self.child = False
-        self._problem: KDProblem | None = None
-        self._forced_problem: KDProblem | None = None
-        self.rows: list[dict[str, Any]] = []
-        self.pipe_fd = -1
-
-    @property
-    def nominal_dt_s(self) -> float:
-        return float(self.inner.nominal_dt_s)
-
-    def __call__(self, problem: KDProblem, iterate: Any, dt_s: float) -> float:
-        if problem is self._forced_problem:  # a child, at the step it forces
-            assert self.forced_dt_s is not None
-            return self.forced_dt_s
-        assert problem.state is not None
-        t = problem.state.state.t_s
-        if problem is not self._problem:  # a new step start
-            self._problem = problem
-            lo, hi = self.window_s
-            if not self.child and lo <= t <= hi:
-                row: dict[str, Any] = {"t_s": t, "outcomes": {}}
-                for dt in CANDIDATES_S:
-                    out = self._fork(problem, dt)
-                    if out is None:  # this process is the child forced to dt
-                        return dt
-                    row["outcomes"][dt] = out
-                self.rows.append(row)
-        dt = float(self.inner(problem, iterate, dt_s))
-        if self.rows and self.rows[-1]["t_s"] == t:
-            self.rows[-1]["own_dt_s"] = dt  # the last iteration's dt is the step's
-            decisions = getattr(self.inner, "decisions", None)  # Gait-Net's record
-            self.rows[-1]["fallback"] = decisions[-1].fallback if decisions else None
-        return dt
-
-    def _fork(self, problem: KDProblem, dt: float) -> dict[str, Any] | None:
-        """The outcome of the child forced to ``dt``; None in that child."""
-        read_fd, write_fd = os.pipe()
-        pid = os.fork()
-        if pid == 0:
-            os.close(read_fd)
-            self.child, self.forced_dt_s, self._forced_problem = True, dt, problem
-            self.pipe_fd = write_fd
-            return None
-        os.close(write_fd)
-        with os.fdopen(read_fd, "rb") as fh:
-            data = fh.read()
-        os.waitpid(pid, 0)
-        return json.loads(data) if data else {"fell": True, "fall_time_s": float("nan")}
 
 
 def run_case(controller: str, direction: str, phase: float, force_n: float, speed: float) -> dict:
@@ -117,23 +55,24 @@ def run_case(controller: str, direction: str, phase: float, force_n: float, spee
     robot = load_robot("humanoid3d")
     config = scenario.config
     inner = make_dt_policy(config.dt_policy, robot, config.sequential)
-    policy = WhatIfDt(inner, (t_push - 0.05, t_push + 0.6))
+    lo, hi = t_push - 0.05, t_push + 0.6
+    policy = RolloutDt(inner, lambda t: lo <= t <= hi, horizon_s=None)  # to the episode's end
     episode = build_episode(scenario, robot=robot, dt_policy=policy)
     loop = EpisodeLoop(episode.sim, episode.controller, scenario.command, duration)
-
-    def outcome() -> dict[str, Any]:
-        s = episode.sim
-        return {"fell": s.fall.fell, "fall_time_s": s.fall.t_s}
-
-    while not loop.done:
-        loop.tick()
-    out = outcome()
-    if policy.child:
-        with os.fdopen(policy.pipe_fd, "wb") as fh:
-            fh.write(json.dumps(out).encode())
-        os._exit(0)
+    drive(loop, policy)
+    fallback = {d.t_s: d.fallback for d in getattr(inner, "decisions", [])}  # Gait-Net's record
+    rows = [
+        {
+            "t_s": step.t_s,
+            "own_dt_s": step.own_dt_s,
+            "fallback": fallback.get(step.t_s),
+            "outcomes": {dt: o.__dict__ for dt, o in step.outcomes.items()},
+        }
+        for step in policy.steps
+    ]
+    sim = episode.sim
     return {"direction": direction, "phase": phase, "force_n": force_n, "t_push_s": t_push,
-            "own": out, "rows": policy.rows}  # fmt: skip
+            "own": {"fell": sim.fall.fell, "fall_time_s": sim.fall.t_s}, "rows": rows}  # fmt: skip
 
 
 def main() -> None:

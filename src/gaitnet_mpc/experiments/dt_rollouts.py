@@ -19,15 +19,15 @@ The child runs in the same process image, so nothing it does reaches the parent.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from gaitnet_mpc.dataset.step_features import step_features
+from gaitnet_mpc.experiments.forked_episode import read_reply, reply_and_exit
 from gaitnet_mpc.mpc.sequential import KDProblem, planned_touchdowns
 from gaitnet_mpc.runner.loop import EpisodeLoop
 
@@ -162,32 +162,15 @@ class RolloutDt:
             self._child_end_s = t_s + self.horizon_s if self.horizon_s is not None else np.inf
             return None
         os.close(write_fd)
-        with os.fdopen(read_fd, "rb") as pipe:
-            data = pipe.read()
-        _, status = os.waitpid(pid, 0)
-        if not data:
-            raise RuntimeError(f"a rollout child (dt {dt} s) ended without a reply ({status})")
-        reply = json.loads(data)
-        if "error" in reply:
-            raise RuntimeError(f"a rollout child (dt {dt} s) failed:\n{reply['error']}")
-        return RolloutOutcome(**reply)
+        return RolloutOutcome(**read_reply(pid, read_fd, f"a rollout child (dt {dt} s)"))
 
     def child_done(self, loop: EpisodeLoop) -> bool:
         """In a child: whether its rollout is over (a fall, the episode's end, the horizon)."""
         return self.is_child and (loop.done or loop.sim.time_s >= self._child_end_s - 1e-9)
 
-    def report_and_exit(self, loop: EpisodeLoop) -> None:
+    def report_and_exit(self, loop: EpisodeLoop) -> NoReturn:
         """In a child: send the outcome to the parent and end the process."""
-        import traceback
-
-        code = 0
-        try:
-            payload: dict[str, Any] = rollout_outcome(loop).__dict__
-        except BaseException:  # everything goes to the parent
-            payload, code = {"error": traceback.format_exc()}, 1
-        with os.fdopen(self._pipe_fd, "wb") as pipe:
-            pipe.write(json.dumps(payload).encode())
-        os._exit(code)
+        reply_and_exit(self._pipe_fd, lambda: rollout_outcome(loop).__dict__)
 
 
 def rollout_outcome(loop: EpisodeLoop) -> RolloutOutcome:

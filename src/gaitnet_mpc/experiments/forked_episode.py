@@ -21,7 +21,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NoReturn
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.runner.loop import EpisodeLoop
@@ -79,24 +79,9 @@ class ForkedEpisode:
         pid = os.fork()
         if pid == 0:  # the child: never returns
             os.close(read_fd)
-            code = 0
-            payload: dict[str, Any]
-            try:
-                payload = {"ok": self._run_child(pushes, outcome)}
-            except BaseException:  # everything, KeyboardInterrupt too, goes to the parent
-                payload, code = {"error": traceback.format_exc()}, 1
-            with os.fdopen(write_fd, "wb") as pipe:
-                pipe.write(json.dumps(payload).encode())
-            os._exit(code)
+            reply_and_exit(write_fd, lambda: self._run_child(pushes, outcome))
         os.close(write_fd)
-        with os.fdopen(read_fd, "rb") as pipe:
-            data = pipe.read()
-        _, status = os.waitpid(pid, 0)
-        reply = json.loads(data) if data else {}
-        if "ok" not in reply:
-            detail = reply.get("error") or f"exit status {status}, no reply"
-            raise RuntimeError(f"a forked episode failed:\n{detail}")
-        return dict(reply["ok"])
+        return read_reply(pid, read_fd, "a forked episode")
 
     def _run_child(
         self, pushes: tuple[Any, ...], outcome: Callable[[EpisodeLoop, float], dict[str, Any]]
@@ -107,3 +92,34 @@ class ForkedEpisode:
         while not loop.done:
             loop.tick()
         return outcome(loop, time.perf_counter() - t0)
+
+
+def reply_and_exit(write_fd: int, compute: Callable[[], dict[str, Any]]) -> NoReturn:
+    """In a forked child: send ``compute()`` (JSON-ready) to the parent through
+    ``write_fd``, or the traceback of whatever it raised, and end the process."""
+    code = 0
+    payload: dict[str, Any]
+    try:
+        payload = {"ok": compute()}
+    except BaseException:  # everything, KeyboardInterrupt too, goes to the parent
+        payload, code = {"error": traceback.format_exc()}, 1
+    with os.fdopen(write_fd, "wb") as pipe:
+        pipe.write(json.dumps(payload).encode())
+    os._exit(code)
+
+
+def read_reply(pid: int, read_fd: int, what: str) -> dict[str, Any]:
+    """In the parent: the reply of child ``pid`` (:func:`reply_and_exit`) read from
+    ``read_fd``, after the child ended.
+
+    Raises:
+        RuntimeError: the child failed (its traceback in the message) or sent nothing.
+    """
+    with os.fdopen(read_fd, "rb") as pipe:
+        data = pipe.read()
+    _, status = os.waitpid(pid, 0)
+    reply = json.loads(data) if data else {}
+    if "ok" not in reply:
+        detail = reply.get("error") or f"exit status {status}, no reply"
+        raise RuntimeError(f"{what} failed:\n{detail}")
+    return dict(reply["ok"])
