@@ -49,7 +49,6 @@ class ForkedEpisode:
 
     Attributes:
         prefix_wall_s: wall time of the prefix [s].
-        fell_in_prefix: the prefix itself fell (every variant then falls as it did).
     """
 
     def __init__(self, episode: Episode, duration_s: float, prefix_s: float) -> None:
@@ -63,7 +62,6 @@ class ForkedEpisode:
         while not self.loop.done and sim.time_s < prefix_s - half_tick:
             self.loop.tick()
         self.prefix_wall_s = time.perf_counter() - t0
-        self.fell_in_prefix = self.loop.fell
 
     def finish(
         self, pushes: tuple[Any, ...], outcome: Callable[[EpisodeLoop, float], dict[str, Any]]
