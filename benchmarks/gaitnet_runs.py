@@ -41,7 +41,8 @@ Job = tuple[str, str, int | None]  # controller ("gaitnet" or "kd@<dt>"), course
 def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
     from gaitnet_mpc.scenario import make_scenario, run_scenario
 
-    name, course_name, seed = job
+    name, course, seed = job
+    course_name, _, speed = course.partition("@")  # flat@0.5: flat at 0.5 m/s
     extra: list[str] = []
     kw: dict = {}
     if name.startswith("gaitnet"):  # as shipped; gaitnet:r0 = no limit, gaitnet:rK = K
@@ -56,7 +57,7 @@ def run(job: Job, weights: str | None, overrides: tuple[str, ...] = ()) -> dict:
     scenario = make_scenario(
         course=course_name,
         course_seed=seed,
-        vx_mps=VX_MPS,
+        vx_mps=float(speed) if speed else VX_MPS,
         duration_s=FLAT_S if course_name == "flat" else SEEDED_S,
         overrides=(*overrides, *extra),
         **kw,
@@ -94,6 +95,9 @@ def main() -> None:
     parser.add_argument("--variants", default="", help="more controllers: gaitnet:rK, oracle")
     parser.add_argument("--seed-offset", type=int, default=0, help="first seed (tuning: 100)")
     parser.add_argument("--no-flat", action="store_true", help="skip the 20 s flat runs")
+    parser.add_argument(
+        "--flat-speeds", default=str(VX_MPS), help="speeds of the flat runs [m/s], e.g. 0.25,0.5"
+    )
     parser.add_argument("--no-gaitnet", action="store_true", help="only --variants and --dts")
     parser.add_argument(
         "--set",
@@ -110,7 +114,8 @@ def main() -> None:
     names += [f"kd@{float(d):g}" for d in args.dts.split(",") if d]
     courses = [c for c in args.courses.split(",") if c]
     seeds = range(args.seed_offset, args.seed_offset + args.seeds)
-    jobs: list[Job] = [] if args.no_flat else [(n, "flat", None) for n in names]
+    flats = [] if args.no_flat else [f"flat@{float(v):g}" for v in args.flat_speeds.split(",") if v]
+    jobs: list[Job] = [(n, f, None) for n in names for f in flats]
     jobs += [(n, c, s) for n in names for c in courses for s in seeds]
     use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
     overrides = tuple(args.overrides)  # a bad one fails here, before any episode
@@ -127,9 +132,11 @@ def main() -> None:
         "",
         machine_info(("numpy", "mujoco", "pin", "piqp")),
         "",
-        f"humanoid3d, {VX_MPS} m/s, {preview}, self-collision on. Flat: {FLAT_S:.0f} s; "
+        f"humanoid3d, {VX_MPS} m/s (flat: the speed after @), {preview}, "
+        f"self-collision on. Flat: {FLAT_S:.0f} s; "
         f"gap and stepping-stones: {args.seeds} seeded layouts "
-        f"({seeds[0]}-{seeds[-1]}{', tuning seeds' if args.seed_offset else ''}), "
+        f"({seeds[0] if seeds else '-'}-{seeds[-1] if seeds else '-'}"
+        f"{', tuning seeds' if args.seed_offset else ''}), "
         f"{SEEDED_S:.0f} s each, {use}. Gait-Net weights: "
         f"{args.weights or 'shipped'}. Settings: "
         f"{', '.join(overrides) if overrides else 'as shipped'}. "
@@ -139,7 +146,7 @@ def main() -> None:
         "| chosen dt [s] median (min-max) | fallbacks | QPs per full solve | full solve ms |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for course in ([] if args.no_flat else ["flat"]) + courses:
+    for course in flats + courses:
         for name in names:
             rs = [r for (n, c, _), r in results.items() if n == name and c == course]
             k = len(rs)
@@ -147,7 +154,11 @@ def main() -> None:
             dt_text = f"{np.median(dts):.4f} ({dts.min():.4f}-{dts.max():.4f})" if dts.size else "-"
             qps = [r["qps"] for r in rs if r["qps"] is not None]
             ms = [r["solve_ms"] for r in rs if r["solve_ms"] is not None]
-            falls = "" if course != "flat" or not rs[0]["fell"] else f" (t {rs[0]['fall_time_s']})"
+            falls = (
+                ""
+                if not course.startswith("flat") or not rs[0]["fell"]
+                else f" (t {rs[0]['fall_time_s']})"
+            )
             lines.append(
                 f"| {name} | {course} | {sum(r['clean'] for r in rs)}/{k} | "
                 f"{sum(not r['fell'] for r in rs)}/{k}{falls} | "
