@@ -79,7 +79,9 @@ def test_run_writes_summary_log_and_video(tmp_path: Path) -> None:
         assert col in header
     last = dict(zip(header, lines[-1].split(","), strict=True))
     assert last["mpc_dt_s"] == "nan" and last["stance_foot"] == "nan"  # no gait schedule
-    assert header[-1] == "self_contact" and last["self_contact"] == "0"
+    assert last["self_contact"] == "0"
+    assert header[-6:] == [f"fext_{a}_n" for a in "xyz"] + [f"text_{a}_nm" for a in "xyz"]
+    assert last["fext_z_n"] == "nan"  # `stand` has no disturbance observer
     import imageio.v3 as iio
 
     frames = iio.imread(out / "video.mp4")

@@ -281,6 +281,26 @@ def test_push_moves_next_foothold_and_stays_feasible(toe_m: float) -> None:
     np.testing.assert_allclose(it.p_foot[:5, 0], np.tile([0.0, 0.08, 0.0], (5, 1)), atol=1e-7)
 
 
+@pytest.mark.parametrize("qp_form", ["sparse", "condensed"])
+def test_an_external_wrench_is_carried_by_the_planned_contact_wrenches(qp_form: str) -> None:
+    """Eqs. 14-15 with the affine term: the feet take up a 30 N downward load (a payload's
+    weight), a 10 N forward push and a 2 N m roll torque, and the CoM keeps its path."""
+    sub = KDSubproblem(KDConfig(mass_kg=MASS, qp_form=qp_form))
+    args, pc0 = walking_problem()
+    free, _, _ = converge(sub, args, pc0)
+    load = np.array([10.0, 0.0, -30.0, 2.0, 0.0, 0.0])
+    loaded, _, _ = converge(sub, args, pc0, wrench_ext=load)
+
+    def moment(it: KDIterate) -> np.ndarray:  # sum_i (p_i - c) x f_i + tau_i per stage
+        arms = it.p_foot - it.p_com[:-1, None, :]
+        return (np.cross(arms, it.f) + it.tau).sum(axis=1)
+
+    extra_force = (loaded.f.sum(axis=1) - free.f.sum(axis=1)).mean(axis=0)
+    np.testing.assert_allclose(extra_force, -load[:3], atol=1.0)  # N
+    assert abs((moment(loaded) - moment(free)).mean(axis=0)[0] + load[3]) < 1.0  # N m
+    assert np.abs(loaded.p_com - free.p_com).max() < 0.01  # m
+
+
 def test_backends_agree_on_one_subproblem() -> None:
     args, pc0 = walking_problem()
     it = KDIterate.initial(pc0, args["p_com_ref"], args["p_foot_ref"], args["contact"], MASS)
@@ -321,6 +341,8 @@ def test_tie_groups_and_next_touchdown_mask() -> None:
         ("contact", np.ones((H, 3), dtype=bool)),
         ("foot_yaw_rad", np.zeros(H)),
         ("p_foot_measured", np.zeros(3)),
+        ("wrench_ext", np.zeros(3)),
+        ("wrench_ext", np.r_[np.nan, np.zeros(5)]),
     ],
 )
 def test_bad_shapes_raise_config_error(sub: KDSubproblem, name: str, value: np.ndarray) -> None:

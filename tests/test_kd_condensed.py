@@ -61,6 +61,25 @@ def test_condensed_matches_sparse_on_random_subproblems(extra: dict[str, Any]) -
     assert len(schedules) >= 10  # many contact schedules solved
 
 
+def test_condensed_matches_sparse_with_an_external_wrench() -> None:
+    """The affine term of eqs. 14-15 (the disturbance observer's wrench) enters both forms
+    alike."""
+    sparse = KDSubproblem(KDConfig(mass_kg=MASS, horizon=6))
+    condensed = KDSubproblem(KDConfig(mass_kg=MASS, horizon=6, qp_form="condensed"))
+    rng = np.random.default_rng(7)
+    solved = 0
+    for seed in range(12):
+        args, it = random_case(seed)
+        wrench = np.r_[rng.normal(scale=30.0, size=3), rng.normal(scale=5.0, size=3)]
+        inputs = sparse.inputs(it, **args, wrench_ext=wrench)
+        ref = sparse.workspace.solve(sparse.build(it, inputs))
+        if ref.status == "infeasible":
+            continue
+        _agree(sparse, _condensed_solution(condensed, it, inputs), ref)
+        solved += 1
+    assert solved >= 6
+
+
 def _condensed_solution(sub: KDSubproblem, it: KDIterate, inputs: Any) -> Any:
     """The condensed form's DAQP solution, on the sparse QP (for its objective and
     residual there)."""

@@ -102,6 +102,8 @@ class Telemetry:
             controller whose MPC does not predict momentum).
         heading_rad: the commanded trunk heading [rad] (Gait-Net's features are measured
             in its frame, :func:`~gaitnet_mpc.dataset.step_features.step_features`).
+        wrench_ext: the disturbance observer's estimate ``[f_ext (N); tau_ext (N m)]`` (6,)
+            (None: no observer).
     """
 
     step_dt_s: float
@@ -110,6 +112,7 @@ class Telemetry:
     step_end_s: float
     prediction: MomentumPrediction | None
     heading_rad: float = 0.0
+    wrench_ext: np.ndarray | None = None
 
 
 class Controller(ABC):

@@ -25,6 +25,7 @@ import numpy as np
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import MomentumPrediction
+from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
 from gaitnet_mpc.control.swing_obstacles import SwingObstacles
@@ -33,12 +34,7 @@ from gaitnet_mpc.control.walking import swing_beside_stance
 from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.dt_policy import CONTROLLER_OF_POLICY
 from gaitnet_mpc.errors import ConfigError, QPSolveError
-from gaitnet_mpc.gait import (
-    GaitScheduleConfig,
-    RaibertConfig,
-    RaibertHeuristic,
-    SwingTrajectory,
-)
+from gaitnet_mpc.gait import GaitScheduleConfig, RaibertConfig, RaibertHeuristic, SwingTrajectory
 from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
 from gaitnet_mpc.gait.preview import PreviewPlan, plan_areas, plan_preview
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
@@ -128,6 +124,8 @@ class KDWalkController(WalkingBase):
         self.preview: PreviewPlan | None = None
         self._preview_t0_s = 0.0
         self.obstacles.reset(state)
+        observer = self.config.disturbance_observer  # starts from this state
+        self.observer = None if observer is None else MomentumObserver(self.robot, observer, state)
 
     def _prediction(self) -> MomentumPrediction | None:
         plan = self.plan
@@ -419,6 +417,7 @@ class KDWalkController(WalkingBase):
             state=StepState(state, stance, swing) if full else None,
             warm_start=None if full or not self.config.warm_start_replans else self.plan,
             t_s=state.t_s,
+            wrench_ext=None if self.observer is None else self.observer.mpc_wrench(),
         )
         t0_s = time.perf_counter()
         try:
@@ -473,6 +472,8 @@ class KDWalkController(WalkingBase):
     def compute(self, state: RobotState) -> np.ndarray:
         sched = self.schedule
         sched.advance_to(state.t_s)
+        if self.observer is not None:
+            self.observer.update(state)
         if sched.at_step_start and sched.step_index != self._started_step:
             self._started_step = sched.step_index
             self._start_step(state)

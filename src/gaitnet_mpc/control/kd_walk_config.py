@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, replace
 from functools import partial
 
 from gaitnet_mpc.config import bounded, check_ranges, load_preset, preset_names
+from gaitnet_mpc.control.disturbance_observer import DisturbanceObserverConfig
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.control.walking import (
@@ -236,6 +237,12 @@ class KDWalkConfig:
     # Which policy chooses each step's dt (fixed, gaitnet, oracle) and its settings; the
     # controller's name sets ``kind`` (gaitnet_mpc/dt_policy.py owns the numbers).
     dt_policy: DtPolicyConfig = field(default_factory=DtPolicyConfig)
+    # The disturbance observer (control/disturbance_observer.py): its estimate of the
+    # external wrench (an unknown payload, a push) enters the MPC's dynamics, eqs. 14-15,
+    # as an affine term. None: off (the paper's MPC). docs/design/disturbance_observer.md.
+    disturbance_observer: DisturbanceObserverConfig | None = field(
+        default_factory=DisturbanceObserverConfig
+    )
 
     def __post_init__(self) -> None:
         j = self.replan_j_max

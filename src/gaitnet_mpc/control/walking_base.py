@@ -12,6 +12,7 @@ import numpy as np
 
 from gaitnet_mpc.command import Command, CommandProfile
 from gaitnet_mpc.control.base import Controller, MomentumPrediction, MPCStats, Telemetry
+from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.lowlevel import LowLevelConfig, LowLevelController
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig
@@ -45,6 +46,7 @@ class WalkingBase(Controller):
         self.max_accel_mps2 = max_accel_mps2
         self._stats = MPCStats()
         self._steps: list[float] = []
+        self.observer: MomentumObserver | None = None  # a subclass's disturbance observer
 
     def reset(self, state: RobotState) -> None:
         self.schedule.reset(state.t_s)
@@ -76,6 +78,7 @@ class WalkingBase(Controller):
             step_end_s=sched.step_start_time_s + sched.current_step_duration_s,
             prediction=self._prediction(),
             heading_rad=self.profile.heading_rad(sched.time_s),
+            wrench_ext=None if self.observer is None else self.observer.wrench.copy(),
         )
 
     def _commanded_path_xy(self, t_s: float) -> np.ndarray:

@@ -290,6 +290,7 @@ class KDSubproblem:
         foot_yaw_rad: np.ndarray,
         foothold_bounds: Mapping[str, tuple[Any, ...]] | None = None,
         p_foot_measured: np.ndarray | None = None,
+        wrench_ext: np.ndarray | None = None,
     ) -> KDInputs:
         """The per-solve data of the QP about ``iterate``, checked (:class:`KDInputs`).
 
@@ -309,13 +310,14 @@ class KDSubproblem:
                 touchdown (:func:`next_touchdown_mask`).
             p_foot_measured: (2, 3) measured foot positions; a foot in stance at stage 0
                 is fixed there. ``None``: ``iterate.p_foot[0]``.
+            wrench_ext: (6,) ``[f_ext; tau_ext]`` beside gravity (eqs. 14-15); None: zeros.
 
         Raises:
             ConfigError: an argument has the wrong shape or invalid values.
         """
         return KDInputs.check(
             self.horizon, x0, iterate, h_ref, H_ref, p_foot_ref, p_com_ref, dts_s, contact,
-            foot_yaw_rad, foothold_bounds, p_foot_measured,
+            foot_yaw_rad, foothold_bounds, p_foot_measured, wrench_ext,
         )  # fmt: skip
 
     def build(self, iterate: KDIterate, inputs: KDInputs) -> QPProblem:
@@ -348,9 +350,9 @@ class KDSubproblem:
         b = np.zeros(self.m_eq)
         b[:NX] = a.x0
         stage_b = b[15:].reshape(h, 15)  # view: rows of stage k
-        stage_b[:, 6:9] = dts[:, None] * (it.f.sum(axis=1) + m * g_vec)
+        stage_b[:, 6:9] = dts[:, None] * (it.f.sum(axis=1) + m * g_vec + a.wrench_ext[:3])
         torque = np.matmul(skew_r, it.f[..., None])[..., 0] + it.tau  # (h, 2, 3) r x f + tau
-        stage_b[:, 9:12] = dts[:, None] * (torque[:, 0] + torque[:, 1])
+        stage_b[:, 9:12] = dts[:, None] * (torque[:, 0] + torque[:, 1] + a.wrench_ext[3:])
         stage_b[:, 12:15] = it.p_com[:-1] - it.p_com[1:]
         a_eq = self._eq.csc(d)
 

@@ -137,13 +137,19 @@ class KDCondensed:
         """
         c_w, l_w, u_w = wrench_rows
         out = kernel.condense(
-            a.dts_s, a.contact, self._mass, self._gravity, it.f, it.tau, it.p_foot,
+            a.dts_s, a.contact, self._mass, self._affine(a), it.f, it.tau, it.p_foot,
             it.p_com, a.x0, a.H_ref, a.h_ref, a.p_com_ref, a.p_foot_ref, self._p_state,
             self._p_input, self._q_input, self._q_p_com, c_w, l_w, u_w, lo, hi,
             a.foot_yaw_rad, self._min_sep, self._sweep, self._trust_com,
         )  # fmt: skip
         names = ("H", "f", "A", "bupper", "blower", "sense")
         return CondensedQP(dict(zip(names, out[:6], strict=True)), *out[6:])
+
+    def _affine(self, a: KDInputs) -> np.ndarray:
+        """``[m g + f_ext; tau_ext]`` (6,): what acts on the momentum beside the feet."""
+        out = a.wrench_ext.copy()
+        out[2] -= self._mass * self._gravity
+        return out
 
     def solve(self, dense: CondensedQP) -> tuple[QPSolution, dict[str, np.ndarray] | None]:
         """Solve ``dense`` with DAQP: the solution (``found`` if DAQP calls it optimal; its

@@ -183,7 +183,7 @@ def condense(
     dts: np.ndarray,
     contact: np.ndarray,
     mass: float,
-    gravity: float,
+    affine: np.ndarray,
     f: np.ndarray,
     tau: np.ndarray,
     p_foot: np.ndarray,
@@ -216,6 +216,8 @@ def condense(
         dts, contact, f, tau, p_foot, p_com, x0: stage times, stance mask, iterate and
             measured state (as in :class:`~gaitnet_mpc.mpc.kd_inputs.KDInputs`).
         pose_ref, momentum_ref, p_com_ref, p_foot_ref: eq. 18's references.
+        mass: the modelled mass [kg]; affine: (6,) the wrench of gravity and the external
+            wrench, ``[m g + f_ext; tau_ext]`` [N; N m].
         p_state: (15,) the sparse QP's diagonal ``P`` on ``x_k, delta p_c,k`` (k >= 1).
         p_input: (3, 3) ``P`` on ``df, dtau, dpf`` per axis; q_input_w: (3, 3) the factors
             of their gradient ``q = q_input_w * (value - reference)`` (references 0 for
@@ -254,8 +256,9 @@ def condense(
             for j in range(n0):
                 new[12 + a, j] += dt / mass * old[6 + a, j]
             mv[k + 1, 12 + a] += dt / mass * mv[k, 6 + a] + p_com[k, a] - p_com[k + 1, a]
-            # linear momentum: + dt (sum df + sum f + m g)
-            mv[k + 1, 6 + a] += dt * (force[a] - (mass * gravity if a == 2 else 0.0))
+            # momentum: + dt (sum df + sum f + m g + f_ext), + dt tau_ext
+            mv[k + 1, 6 + a] += dt * (force[a] + affine[a])
+            mv[k + 1, 9 + a] += dt * affine[3 + a]
             for b in range(3):  # angular momentum: + dt skew(sum f) dpc_k
                 s = dt * _skew(force, a, b)
                 if s != 0.0:

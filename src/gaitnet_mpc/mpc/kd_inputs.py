@@ -10,7 +10,7 @@ arrays of the right shapes (:class:`~gaitnet_mpc.errors.ConfigError` otherwise).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -45,6 +45,9 @@ class KDInputs:
         foot_yaw_rad: (h, 2) foot headings.
         p_foot_measured: (2, 3) measured foot positions [m].
         foothold_bounds: per foot (ordered as :data:`FEET`), its eq. 24 box or ``None``.
+        wrench_ext: (6,) external wrench ``[f_ext (N); tau_ext about the CoM (N m)]``
+            acting through the horizon beside gravity (the disturbance observer's
+            estimate, :mod:`~gaitnet_mpc.control.disturbance_observer`); zeros: none.
     """
 
     x0: np.ndarray
@@ -57,6 +60,7 @@ class KDInputs:
     foot_yaw_rad: np.ndarray
     p_foot_measured: np.ndarray
     foothold_bounds: tuple[StageBox | None, ...]
+    wrench_ext: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
     @classmethod
     def check(
@@ -73,6 +77,7 @@ class KDInputs:
         foot_yaw_rad: object,
         foothold_bounds: object,
         p_foot_measured: object,
+        wrench_ext: object = None,
     ) -> KDInputs:
         """The arguments of :meth:`~gaitnet_mpc.mpc.implicit_kd.KDSubproblem.build`,
         checked against a horizon of ``horizon`` stages.
@@ -103,7 +108,8 @@ class KDInputs:
             else float_array("p_foot_measured", p_foot_measured, (N_FEET, 3))
         )
         bounds = _check_foothold_bounds(foothold_bounds, fields["contact"])
-        return cls(**fields, p_foot_measured=measured, foothold_bounds=bounds)
+        ext = np.zeros(6) if wrench_ext is None else float_array("wrench_ext", wrench_ext, (6,))
+        return cls(**fields, p_foot_measured=measured, foothold_bounds=bounds, wrench_ext=ext)
 
     def foot_bounds(
         self, it: KDIterate, height_from_reference: bool, trust_region_m: float | None

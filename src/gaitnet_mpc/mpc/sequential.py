@@ -118,6 +118,9 @@ class KDProblem:
             the iterations from, shifted to this horizon (:func:`shift_iterate`); None:
             :meth:`KDIterate.initial`.
         t_s: time of the measurement [s] (read with ``warm_start`` only).
+        wrench_ext: (6,) estimated external wrench ``[f_ext (N); tau_ext about the CoM
+            (N m)]``, held through the horizon (an affine term of eqs. 14-15; the
+            disturbance observer's); None: none.
     """
 
     q: np.ndarray
@@ -138,6 +141,7 @@ class KDProblem:
     state: StepState | None = None
     warm_start: SequentialResult | None = None
     t_s: float = 0.0
+    wrench_ext: np.ndarray | None = None
 
 
 class DtPolicy(Protocol):
@@ -409,7 +413,7 @@ class SequentialKDMPC:
             if inputs is None:
                 inputs = sub.inputs(
                     iterate, x0, h_ref, pose_ref, pf_ref, r.p_com_ref, dts, contact,
-                    problem.foot_yaw_rad, boxes or None, p_measured,
+                    problem.foot_yaw_rad, boxes or None, p_measured, problem.wrench_ext,
                 )  # fmt: skip
             else:  # the same state, contacts and boxes: only the references and dts move
                 inputs = inputs.with_references(h_ref, pose_ref, pf_ref, r.p_com_ref, dts)

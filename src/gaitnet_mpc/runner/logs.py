@@ -18,7 +18,9 @@ class EpisodeLog:
     """Per-tick time series, kept in memory and written as CSV.
 
     ``self_contact`` is 1 on ticks where two robot geoms touch (see
-    :class:`~gaitnet_mpc.sim.simulator.SelfCollisionStats`), else 0.
+    :class:`~gaitnet_mpc.sim.simulator.SelfCollisionStats`), else 0. ``fext_*_n`` and
+    ``text_*_nm``: the disturbance observer's estimate of the external force and torque
+    about the CoM (NaN for a controller without one).
     """
 
     columns: tuple[str, ...] = (
@@ -50,6 +52,12 @@ class EpisodeLog:
         "mpc_solve_ms",
         "stance_foot",
         "self_contact",
+        "fext_x_n",
+        "fext_y_n",
+        "fext_z_n",
+        "text_x_nm",
+        "text_y_nm",
+        "text_z_nm",
     )
     rows: list[np.ndarray] = field(default_factory=list)
 
@@ -153,6 +161,12 @@ class TelemetryRecorder:
         """Index of the stance foot in ``FEET`` (NaN without a gait)."""
         tel = self.telemetry
         return np.nan if tel is None else float(FEET.index(tel.stance_foot))
+
+    def wrench_ext(self) -> np.ndarray:
+        """The disturbance observer's estimate (6,) (NaN without one)."""
+        tel = self.telemetry
+        w = None if tel is None else tel.wrench_ext
+        return np.full(6, np.nan) if w is None else w
 
     def after_compute(self, t_s: float) -> None:
         """Take this tick's telemetry and record the solves that the last ``compute`` call

@@ -85,6 +85,7 @@ def _log_row(
             [tau_abs.max(), (tau_abs / tau_limit).max()],
             [probe.step_dt(), probe.last_qps, probe.last_ms, probe.stance_code()],
             [float(self_contact)],
+            probe.wrench_ext(),
         ]
     )
 
