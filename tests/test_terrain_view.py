@@ -41,6 +41,7 @@ def test_knowledge_is_recorded_and_the_preview_needs_the_multi_step_view() -> No
         "preview": "one-step",
         "multi_step": False,
         "obstacle_heights": True,
+        "blind": False,
     }
     robot, course, cmd = load_robot("humanoid3d"), load_course("flat"), Command(0.5)
     cfg = preview_walk_config()

@@ -53,6 +53,7 @@ SCENARIO_DEFAULTS: dict[str, Any] = {
     "duration": 10.0,
     "dt": None,
     "preview": False,
+    "blind": False,
     "gaitnet_weights": None,
     "preset": None,
     "config": None,
@@ -150,6 +151,14 @@ def add_parser(sub: Any) -> None:
         default=None,
         help="kd, gaitnet, oracle: choose patches and the CoM path with a multi-step LIP "
         "footstep plan (gait/preview.py) instead of the one-step preview",
+    )
+    run.add_argument(
+        "--blind",
+        action="store_true",
+        default=None,
+        help="kd, gaitnet, oracle: the controller is told no terrain (the paper's unknown "
+        "terrain): footholds at the stance foot's height, the swing foot finds the ground; "
+        "the same as --set blind=true",
     )
     run.add_argument(
         "--gaitnet-weights",
@@ -303,9 +312,13 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
 def _make_scenario(v: dict[str, Any]) -> Any:
     """:func:`~gaitnet_mpc.scenario.make_scenario` of the options ``v``."""
     from gaitnet_mpc.scenario import make_scenario
+    from gaitnet_mpc.scenario.model import KD_FAMILY
     from gaitnet_mpc.sim.cart import Cart
     from gaitnet_mpc.sim.disturbances import Push
 
+    if v["blind"] and v["controller"] not in KD_FAMILY:
+        raise ConfigError("--blind", v["controller"], f"one of {', '.join(KD_FAMILY)}")
+    blind = ("blind=true",) if v["blind"] else ()
     return make_scenario(
         robot=v["robot"],
         controller=v["controller"],
@@ -320,7 +333,7 @@ def _make_scenario(v: dict[str, Any]) -> Any:
         cart=None if v["cart_load_kg"] is None else Cart(load_kg=v["cart_load_kg"]),
         preset=v["preset"],
         config_file=v["config"],
-        overrides=tuple(v["overrides"]),
+        overrides=(*v["overrides"], *blind),
         dt_s=v["dt"],
         preview=bool(v["preview"]),
         gaitnet_weights=v["gaitnet_weights"],

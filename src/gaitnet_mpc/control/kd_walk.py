@@ -25,6 +25,7 @@ import numpy as np
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.base import MomentumPrediction
+from gaitnet_mpc.control.blind_touchdown import TouchdownSearch
 from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
@@ -35,7 +36,7 @@ from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.dt_policy import CONTROLLER_OF_POLICY
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import GaitScheduleConfig, RaibertConfig, RaibertHeuristic, SwingTrajectory
-from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit
+from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit, sway_phases
 from gaitnet_mpc.gait.preview import PreviewPlan, plan_areas, plan_preview
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.geometry import heading_axes
@@ -111,6 +112,7 @@ class KDWalkController(WalkingBase):
             robot, terrain, command, schedule, self.config.low_level, self.config.max_accel_mps2
         )
         self.raibert = _kd_raibert(robot.spec.planar)
+        self.search = TouchdownSearch() if self.config.blind else None
         self.obstacles = SwingObstacles(robot, terrain, self.config)
 
     # ---------------------------------------------------------------- episode
@@ -182,7 +184,9 @@ class KDWalkController(WalkingBase):
             yaw_rad=float(state.base_rpy_rad[2]),
             cmd_yaw_rate_radps=cmd.yaw_rate_radps,
         )
-        z = self.terrain.foothold_height_m(p[0], p[1], self.ground_z)
+        stance_z = state.foot_pos_world_m[self.schedule.stance_foot][2]  # blind: its height
+        ground = stance_z - self.robot.spec.foot_contact_radius_m if self.search else self.ground_z
+        z = self.terrain.foothold_height_m(p[0], p[1], ground)
         p[2] = z + self.robot.spec.foot_contact_radius_m
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]
@@ -202,6 +206,8 @@ class KDWalkController(WalkingBase):
         patch nearest the nominal (heuristic) foothold
         (:meth:`TerrainView.reachable_foothold_bounds`).
         """
+        if self.search is not None:
+            return {}  # blind: no patch known
         if self.preview is not None:
             lo, hi = self._preview_area(1).foothold_box(*self._margins)
         else:
@@ -244,25 +250,12 @@ class KDWalkController(WalkingBase):
         dts = np.asarray(timing.dts_s, dtype=float)
         contact = np.asarray(timing.contact, dtype=bool)
         h = dts.size
-        n = timing.stages_per_step
-        # step start time and length of each stage's step
-        start = np.empty(h)
-        length = np.empty(h)
-        s0 = -float(timing.time_in_step_s)
-        for k in range(h):
-            if k > 0 and not np.array_equal(contact[k], contact[k - 1]):
-                s0 = float(times[k])
-            start[k] = s0
-        for k in range(h):
-            first = int(np.searchsorted(times, start[k] - 1e-9)) if start[k] >= 0 else 0
-            length[k] = n * float(dts[min(first, h - 1)])
-        side = np.where(contact[:, 0] & ~contact[:, 1], 1.0, np.where(contact[:, 1], -1.0, 0.0))
-        kk = np.minimum(np.arange(h + 1), h - 1)
-        tau = times - start[kk]
-        T = length[kk]
+        side, tau, T = sway_phases(
+            times, dts, contact, timing.time_in_step_s, timing.stages_per_step
+        )
         z = max(float(self.mpc.ref_workspace.com_height_m), self.config.lip_min_com_height_m)
         w = lip_frequency(z)
-        y_off, v_off = lip_sway_orbit(side[kk], self.config.lip_half_width_m, w, tau, T)
+        y_off, v_off = lip_sway_orbit(side, self.config.lip_half_width_m, w, tau, T)
         # centre line: commanded path, lateral offset from the measured CoM
         yaw = self.profile.heading_rad(state.t_s)
         e_x, e_y = heading_axes(yaw)
@@ -436,7 +429,8 @@ class KDWalkController(WalkingBase):
             self.swing = self._swing_trajectory(target if td is None else td)
         if td is not None and self.swing is not None:
             td = td.copy()
-            td[2] -= self.config.touchdown_depth_m
+            c = self.config
+            td[2] -= c.blind_search_depth_m if self.search else c.touchdown_depth_m
             if sched.phase_in_step < self.config.retarget_until_phase:
                 start = self.liftoff[swing]
                 self.swing.retarget(
@@ -463,6 +457,8 @@ class KDWalkController(WalkingBase):
         if self.preview is not None:
             target = self._on_preview(target, 1)
         self.swing = self._swing_trajectory(target)
+        if self.search is not None:
+            self.search.new_step()
         self._solve(state, full=True)
         self.obstacles.check_shank(state, sched, self.swing, self.plan, self.profile)
         self._steps.append(sched.current_step_duration_s)
@@ -496,4 +492,6 @@ class KDWalkController(WalkingBase):
         if yaw is not None and self.config.keep_feet_apart:
             p_swing = swing_beside_stance(self.robot, state, swing, p_swing, yaw)
         target = {swing: (p_swing, v_swing, a_swing)}
+        if self.search is not None:
+            target[swing] = self.search.target(state, swing, sched.phase_in_step, target[swing])
         return self.low.torques(state, wrench, target, yaw)

@@ -169,6 +169,15 @@ class KDWalkConfig:
     # unknown to the robot"). Where an obstacle stands is known either way (touchdown
     # boxes keep off it). Recorded as terrain_knowledge.obstacle_heights.
     obstacle_heights: bool = True
+    # Blind (--blind, the paper's unknown terrain): the controller is told no terrain at
+    # all. Footholds are planned at the stance foot's height, without eq. 24 boxes; the
+    # swing aims blind_search_depth_m below that height, and its first contact in the
+    # second half of the step ends it (the foot is held where it landed until its stance
+    # begins). Recorded as terrain_knowledge.blind.
+    blind: bool = False
+    blind_search_depth_m: float = bounded(
+        0.04, "[0, 0.1] m", "a depth", "0.1 m: the humanoid's shin is 0.2 m long"
+    )
     # With obstacle_heights off, swings clear each obstacle as if it were this high: the
     # stated height up to which unknown obstacles are stepped over (docs/design/obstacles.md).
     unknown_obstacle_height_m: float = bounded(
@@ -302,6 +311,8 @@ def walk_terrain(course: Course, config: KDWalkConfig) -> TerrainView:
     """The terrain view ``config`` needs: the one-step preview, or with ``config.preview``
     the multi-step one."""
     knowledge = TerrainKnowledge(
-        multi_step=config.preview is not None, obstacle_heights=config.obstacle_heights
+        multi_step=config.preview is not None,
+        obstacle_heights=config.obstacle_heights,
+        blind=config.blind,
     )
     return TerrainView(course, knowledge)

@@ -8,7 +8,10 @@ lift-off and its touchdown stand, and their heights (``TerrainKnowledge.obstacle
 on by default; off, as in the paper's Fig. 1(e) hardware run, the heights are not known
 and the controller assumes one). The multi-step footstep preview of
 ``kd --preview`` (beyond the paper) may in addition read every patch of the course ahead
-(:meth:`TerrainView.course_for_multi_step_preview`).
+(:meth:`TerrainView.course_for_multi_step_preview`). A *blind* controller
+(``TerrainKnowledge.blind``, ``--blind``, the paper's "unknown terrain" of Fig. 1(c)) is told
+nothing: no patch, no height, no obstacle; it plans on the height of its stance foot and
+finds the ground with the swing foot (``control/kd_walk.py``).
 
 Controllers get a :class:`TerrainView`, never the :class:`~gaitnet_mpc.terrain.Course`
 itself, and ``summary.json`` records the run's :class:`TerrainKnowledge` under
@@ -38,10 +41,17 @@ class TerrainKnowledge:
         obstacle_heights: swing trajectories know the heights of the obstacles between
             lift-off and touchdown; where an obstacle stands (its footprint) is known
             either way.
+        blind: nothing is known: every query answers as over unbroken ground of unknown
+            height (no patch, the caller's default height, no obstacles).
     """
 
     multi_step: bool = False
     obstacle_heights: bool = True
+    blind: bool = False
+
+    def __post_init__(self) -> None:
+        if self.blind and self.multi_step:
+            raise ConfigError("blind", True, "False with the multi-step preview (--preview)")
 
     def to_dict(self) -> dict[str, object]:
         return {"preview": "multi-step" if self.multi_step else "one-step", **asdict(self)}
@@ -56,7 +66,13 @@ class TerrainView:
 
     # ------------------------------------------------------------- one-step preview
     def patch_at(self, x_m: float, y_m: float) -> int | None:
-        """Index of the patch under a candidate foothold (None: a hole)."""
+        """Index of the patch under a candidate foothold (None: a hole).
+
+        Raises:
+            ConfigError: the controller is blind.
+        """
+        if self.knowledge.blind:
+            raise ConfigError("terrain_knowledge.blind", True, "False for a patch query")
         return self._course.patch_at(x_m, y_m)
 
     def patch(self, index: int) -> Patch:
@@ -64,7 +80,10 @@ class TerrainView:
         return self._course.patches[index]
 
     def foothold_height_m(self, x_m: float, y_m: float, default_m: float) -> float:
-        """Top of the patch under a candidate foothold, ``default_m`` over a hole [m]."""
+        """Top of the patch under a candidate foothold, ``default_m`` over a hole or when
+        blind [m]."""
+        if self.knowledge.blind:
+            return default_m
         j = self.patch_at(x_m, y_m)
         return self.patch(j).z_top_m if j is not None else default_m
 
@@ -84,7 +103,13 @@ class TerrainView:
 
         The box lies off the obstacles' footprints, widened by ``obstacle_clearance_m``:
         the preview sees where an obstacle stands even where its height is not known (the
-        paper's Fig. 1(e) hardware run: "the obstacle's height is unknown to the robot")."""
+        paper's Fig. 1(e) hardware run: "the obstacle's height is unknown to the robot").
+
+        Raises:
+            ConfigError: the controller is blind (it has no box to ask for).
+        """
+        if self.knowledge.blind:
+            raise ConfigError("terrain_knowledge.blind", True, "False for an eq. 24 box")
         return self._course.reachable_foothold_bounds(
             p_com_touchdown_xy,
             foot,
@@ -106,7 +131,9 @@ class TerrainView:
     def obstacle_footprints(self, x0_m: float, x1_m: float) -> list[Obstacle]:
         """The obstacles between ``x0_m`` and ``x1_m`` (either order) whatever
         ``obstacle_heights`` says: where they stand is part of the preview, their height
-        only with ``obstacle_heights`` (read ``height_m`` only then)."""
+        only with ``obstacle_heights`` (read ``height_m`` only then); none when blind."""
+        if self.knowledge.blind:
+            return []
         return self._course.obstacles_between(min(x0_m, x1_m), max(x0_m, x1_m))
 
     # ------------------------------------------------------------- beyond the paper

@@ -68,3 +68,34 @@ def lip_sway_orbit(
     y_off = side * b * (1.0 - np.cosh(omega * (tau_s - step_s / 2)) / den)
     v_off = -side * b * omega * np.sinh(omega * (tau_s - step_s / 2)) / den
     return y_off, v_off
+
+
+def sway_phases(
+    times_s: np.ndarray,
+    dts_s: np.ndarray,
+    contact: np.ndarray,
+    time_in_step_s: float,
+    stages_per_step: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where in its step each of a horizon's ``h + 1`` boundaries lies, for
+    :func:`lip_sway_orbit`: ``side`` (+1 left stance, -1 right, 0 none), the time in the
+    step ``tau_s`` and the step's length ``step_s`` (``stages_per_step`` of its stages).
+
+    Args:
+        times_s: (h + 1,) boundary times from now; dts_s: (h,) stage lengths;
+        contact: (h, 2) stance mask (left, right); time_in_step_s: the current step's age.
+    """
+    h = dts_s.size
+    start = np.empty(h)  # step start time and length of each stage's step
+    length = np.empty(h)
+    s0 = -float(time_in_step_s)
+    for k in range(h):
+        if k > 0 and not np.array_equal(contact[k], contact[k - 1]):
+            s0 = float(times_s[k])
+        start[k] = s0
+    for k in range(h):
+        first = int(np.searchsorted(times_s, start[k] - 1e-9)) if start[k] >= 0 else 0
+        length[k] = stages_per_step * float(dts_s[min(first, h - 1)])
+    side = np.where(contact[:, 0] & ~contact[:, 1], 1.0, np.where(contact[:, 1], -1.0, 0.0))
+    kk = np.minimum(np.arange(h + 1), h - 1)
+    return side[kk], times_s - start[kk], length[kk]
