@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from gaitnet_mpc.command import Command
 from gaitnet_mpc.control.kd_walk import KDWalkController
-from gaitnet_mpc.control.kd_walk_config import preview_walk_config, walk_terrain
+from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config, walk_terrain
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.robots import load_robot
-from gaitnet_mpc.terrain import load_course
+from gaitnet_mpc.terrain import Course, Patch, load_course
 
 
 def test_one_step_view_refuses_the_whole_course() -> None:
@@ -52,8 +54,6 @@ def test_knowledge_is_recorded_and_the_preview_needs_the_multi_step_view() -> No
 
 
 def test_swings_assume_a_height_where_the_obstacles_height_is_unknown() -> None:
-    from dataclasses import replace
-
     import numpy as np
 
     robot, course, cmd = load_robot("humanoid3d"), load_course("obstacle"), Command(0.5)
@@ -66,3 +66,38 @@ def test_swings_assume_a_height_where_the_obstacles_height_is_unknown() -> None:
     assert blind.terrain_knowledge()["obstacle_heights"] is False
     assert blind.obstacles.near(start, target) == [pytest.approx((1.45, 1.55, 0.05))]
     assert blind.obstacles.near(start - 1.0, target - 1.0) == []  # none near that swing
+
+
+def _steps_course() -> Course:
+    """Three tiles in a row, the middle one 6 cm up, and a tile beside the middle one."""
+    return Course(
+        name="steps",
+        patches=(
+            Patch(-1.0, 0.25, -0.25, 0.25, 0.0),
+            Patch(0.25, 0.5, -0.25, 0.25, 0.06),
+            Patch(0.5, 2.0, -0.25, 0.25, 0.0),
+            Patch(0.25, 0.5, 0.25, 0.75, 0.10),  # beside the path
+        ),
+    )
+
+
+def test_a_swing_clears_the_tiles_it_passes_over() -> None:
+    """The uneven-ground fix (docs/design/uneven_steps.md): a tile higher than the lower of
+    the swing's ends, under its path, is cleared like an obstacle; the ends' own tiles and
+    tiles beside the path are not."""
+    import numpy as np
+
+    robot, cmd = load_robot("humanoid3d"), Command(0.5)
+    view = TerrainView(_steps_course())
+    assert [p.z_top_m for p in view.patches_crossed(0.1, 0.0, 0.7, 0.0)] == [0.0, 0.06, 0.0]
+    assert [p.z_top_m for p in view.patches_crossed(0.1, 0.2, 0.7, 0.3)] == [0.0, 0.06, 0.1]
+    cfg = KDWalkConfig()
+    ctrl = KDWalkController(robot, walk_terrain(_steps_course(), cfg), cmd, config=cfg)
+    start, target = np.array([0.1, 0.0, 0.01]), np.array([0.7, 0.0, 0.01])
+    assert ctrl.obstacles.near(start, target) == [(0.25, 0.5, 0.06)]
+    assert ctrl.obstacles.near(start, np.array([0.4, 0.0, 0.07])) == []  # onto the tile
+    level = KDWalkController(robot, walk_terrain(load_course("flat"), cfg), cmd, config=cfg)
+    assert level.obstacles.near(start, target) == []
+    blind_cfg = replace(cfg, blind=True)
+    blind = KDWalkController(robot, walk_terrain(_steps_course(), blind_cfg), cmd, config=blind_cfg)
+    assert blind.obstacles.near(start, target) == []

@@ -22,7 +22,12 @@ from gaitnet_mpc.kinematics.shank_clearance import shank_capsules, swing_shank_c
 from gaitnet_mpc.mpc.sequential import SequentialResult
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.state import RobotState
-from gaitnet_mpc.terrain import Obstacle
+from gaitnet_mpc.terrain import Obstacle, Patch
+
+
+def _contains(p: Patch, point: np.ndarray) -> bool:
+    """Whether ``point``'s (x, y) lies on ``p``."""
+    return p.x_min <= point[0] <= p.x_max and p.y_min <= point[1] <= p.y_max
 
 
 def _footprint(ob: Obstacle) -> tuple[float, ...]:
@@ -56,12 +61,32 @@ class SwingObstacles:
         self._shank_recorded_step = -1
 
     def near(self, start: np.ndarray, target: np.ndarray) -> list[tuple[float, float, float]]:
-        """``(x_min, x_max, top_z)`` of the obstacles near the swing from ``start`` to
-        ``target`` (``swing_obstacle_window_m``), with the tops of :meth:`top`."""
+        """``(x_min, x_max, top_z)`` of what the swing from ``start`` to ``target`` clears:
+        the obstacles near it (``swing_obstacle_window_m``), with the tops of :meth:`top`,
+        and the terrain steps it passes over (:meth:`steps_between`)."""
         x0, x1 = sorted((start[0], target[0]))
         behind_m, ahead_m = self.config.swing_obstacle_window_m
         found = self.terrain.obstacle_footprints(x0 - behind_m, x1 + ahead_m)
-        return [(o.x_min, o.x_max, self.top(o)) for o in found]
+        return [(o.x_min, o.x_max, self.top(o)) for o in found] + self.steps_between(start, target)
+
+    def steps_between(
+        self, start: np.ndarray, target: np.ndarray
+    ) -> list[tuple[float, float, float]]:
+        """``(x_min, x_max, top_z)`` of the patches the swing passes over between its
+        lift-off and its touchdown patches that stand higher than the lower of those two
+        (a tile of uneven ground). A patch counts where the foot's centre passes over it:
+        the clearance is reckoned along x over the patch's whole length, so a patch that
+        the foot's edge only grazes beside the path (a stepping stone of the other foot)
+        would lift the whole swing. The lift-off's and the touchdown's own patches are the
+        swing's ends, not steps. Level ground gives none, so swings there are unchanged."""
+        patches = self.terrain.patches_crossed(*start[:2], *target[:2])
+        ends = [p for p in patches if _contains(p, start) or _contains(p, target)]
+        if len(ends) < 2:  # an end over a hole, or both ends on one patch: nothing to climb
+            return []
+        lower = min(p.z_top_m for p in ends) + 1e-3  # the lower end's surface, + 1 mm
+        return [
+            (p.x_min, p.x_max, p.z_top_m) for p in patches if p not in ends and p.z_top_m > lower
+        ]
 
     def top(self, ob: Obstacle) -> float:
         """The top [m] a swing clears over ``ob``: its known top, or with

@@ -4,14 +4,15 @@ The paper's controller has a *one-step terrain preview* (Sec. IV-B, eq. 24): at 
 it knows the patches the next touchdown may use, with their boxes and heights. A robot that
 perceives its next foothold also perceives what stands between its swing foot and that
 foothold, so the one-step preview here includes where the obstacles between a swing's
-lift-off and its touchdown stand, and their heights (``TerrainKnowledge.obstacle_heights``,
-on by default; off, as in the paper's Fig. 1(e) hardware run, the heights are not known
-and the controller assumes one). The multi-step footstep preview of
-``kd --preview`` (beyond the paper) may in addition read every patch of the course ahead
-(:meth:`TerrainView.course_for_multi_step_preview`). A *blind* controller
-(``TerrainKnowledge.blind``, ``--blind``, the paper's "unknown terrain" of Fig. 1(c)) is told
-nothing: no patch, no height, no obstacle; it plans on the height of its stance foot and
-finds the ground with the swing foot (``control/kd_walk.py``).
+lift-off and its touchdown stand, the patches under its path (the tiles of uneven ground
+a long step passes over), and the obstacles' heights
+(``TerrainKnowledge.obstacle_heights``, on by default; off, as in the paper's Fig. 1(e)
+hardware run, the heights are not known and the controller assumes one). The multi-step
+footstep preview of ``kd --preview`` (beyond the paper) may in addition read every patch
+of the course ahead (:meth:`TerrainView.course_for_multi_step_preview`). A *blind*
+controller (``TerrainKnowledge.blind``, ``--blind``, the paper's "unknown terrain" of
+Fig. 1(c)) is told nothing: no patch, no height, no obstacle; it plans on the height of
+its stance foot and finds the ground with the swing foot (``control/blind_touchdown.py``).
 
 Controllers get a :class:`TerrainView`, never the :class:`~gaitnet_mpc.terrain.Course`
 itself, and ``summary.json`` records the run's :class:`TerrainKnowledge` under
@@ -135,6 +136,25 @@ class TerrainView:
         if self.knowledge.blind:
             return []
         return self._course.obstacles_between(min(x0_m, x1_m), max(x0_m, x1_m))
+
+    def patches_crossed(self, x0_m: float, y0_m: float, x1_m: float, y1_m: float) -> list[Patch]:
+        """The patches whose footprint the segment from ``(x0, y0)`` to ``(x1, y1)`` meets:
+        the ground under a swing's straight path; none when blind."""
+        if self.knowledge.blind:
+            return []
+        out = []
+        for p in self._course.patches:
+            lo, hi = max(p.x_min, min(x0_m, x1_m)), min(p.x_max, max(x0_m, x1_m))
+            if lo > hi:
+                continue
+            if x1_m == x0_m:  # a sideways path: its whole y-range at x0
+                ya, yb = sorted((y0_m, y1_m))
+            else:  # the path's y over the patch's x-interval
+                slope = (y1_m - y0_m) / (x1_m - x0_m)
+                ya, yb = sorted((y0_m + slope * (lo - x0_m), y0_m + slope * (hi - x0_m)))
+            if ya <= p.y_max and yb >= p.y_min:
+                out.append(p)
+        return out
 
     # ------------------------------------------------------------- beyond the paper
     def course_for_multi_step_preview(self) -> Course:
