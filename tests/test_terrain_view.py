@@ -83,8 +83,8 @@ def _steps_course() -> Course:
 
 def test_a_swing_clears_the_tiles_it_passes_over() -> None:
     """The uneven-ground fix (docs/design/uneven_steps.md): a tile higher than the lower of
-    the swing's ends, under its path, is cleared like an obstacle; the ends' own tiles and
-    tiles beside the path are not."""
+    the swing's ends, under its path, is cleared like an obstacle, and so is the part of a
+    higher end's tile that the foot does not stand on; tiles beside the path are not."""
     import numpy as np
 
     robot, cmd = load_robot("humanoid3d"), Command(0.5)
@@ -95,7 +95,13 @@ def test_a_swing_clears_the_tiles_it_passes_over() -> None:
     ctrl = KDWalkController(robot, walk_terrain(_steps_course(), cfg), cmd, config=cfg)
     start, target = np.array([0.1, 0.0, 0.01]), np.array([0.7, 0.0, 0.01])
     assert ctrl.obstacles.near(start, target) == [(0.25, 0.5, 0.06)]
-    assert ctrl.obstacles.near(start, np.array([0.4, 0.0, 0.07])) == []  # onto the tile
+    reach = cfg.swing.foot_half_length_m + 0.01  # the foot point to its end, + 1 cm
+    # onto the higher tile: its edge before the landing foot (a toe would clip it) ...
+    up = ctrl.obstacles.near(start, np.array([0.4, 0.0, 0.07]))
+    assert up == [pytest.approx((0.25, 0.4 - reach, 0.06))]
+    # ... and off it: its edge ahead of the lifted foot (a heel would clip it)
+    down = ctrl.obstacles.near(np.array([0.3, 0.0, 0.07]), target)
+    assert down == [pytest.approx((0.3 + reach, 0.5, 0.06))]
     level = KDWalkController(robot, walk_terrain(load_course("flat"), cfg), cmd, config=cfg)
     assert level.obstacles.near(start, target) == []
     blind_cfg = replace(cfg, blind=True)

@@ -24,6 +24,9 @@ from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.state import RobotState
 from gaitnet_mpc.terrain import Obstacle, Patch
 
+#: Gap between the foot at a swing's end and the part of its patch it clears [m].
+_EDGE_GAP_M = 0.01
+
 
 def _contains(p: Patch, point: np.ndarray) -> bool:
     """Whether ``point``'s (x, y) lies on ``p``."""
@@ -72,21 +75,36 @@ class SwingObstacles:
     def steps_between(
         self, start: np.ndarray, target: np.ndarray
     ) -> list[tuple[float, float, float]]:
-        """``(x_min, x_max, top_z)`` of the patches the swing passes over between its
-        lift-off and its touchdown patches that stand higher than the lower of those two
-        (a tile of uneven ground). A patch counts where the foot's centre passes over it:
-        the clearance is reckoned along x over the patch's whole length, so a patch that
-        the foot's edge only grazes beside the path (a stepping stone of the other foot)
-        would lift the whole swing. The lift-off's and the touchdown's own patches are the
-        swing's ends, not steps. Level ground gives none, so swings there are unchanged."""
+        """``(x_min, x_max, top_z)`` of the ground the swing passes over that stands higher
+        than the lower of its lift-off and touchdown patches (uneven tiles): a patch in
+        between, and of a higher end's own patch the part the foot does not stand on (ahead
+        of the lifted foot when stepping down, behind the landing foot when stepping up:
+        the edge a heel or a toe would clip). A patch counts where the foot's centre
+        passes over it: the clearance is reckoned along x over the patch's whole length,
+        so a patch that the foot's edge only grazes beside the path (a stepping stone of
+        the other foot) would lift the whole swing. Level ground gives none, so swings
+        there are unchanged."""
         patches = self.terrain.patches_crossed(*start[:2], *target[:2])
-        ends = [p for p in patches if _contains(p, start) or _contains(p, target)]
-        if len(ends) < 2:  # an end over a hole, or both ends on one patch: nothing to climb
+        first = [p for p in patches if _contains(p, start)]
+        last = [p for p in patches if _contains(p, target)]
+        if not first or not last:  # an end over a hole: its height is not known here
             return []
-        lower = min(p.z_top_m for p in ends) + 1e-3  # the lower end's surface, + 1 mm
-        return [
-            (p.x_min, p.x_max, p.z_top_m) for p in patches if p not in ends and p.z_top_m > lower
-        ]
+        lower = min(first[0].z_top_m, last[0].z_top_m) + 1e-3  # the lower end, + 1 mm
+        ahead = 1.0 if target[0] >= start[0] else -1.0
+        reach = self.config.swing.foot_half_length_m + _EDGE_GAP_M  # from the foot point
+        out = []
+        for p in patches:
+            if p.z_top_m <= lower:
+                continue
+            lo, hi = p.x_min, p.x_max
+            for end, sign in ((start, ahead), (target, -ahead)):  # off the foot at each end
+                if _contains(p, end):
+                    lo, hi = (
+                        (max(lo, end[0] + reach), hi) if sign > 0 else (lo, min(hi, end[0] - reach))
+                    )
+            if lo < hi:
+                out.append((lo, hi, p.z_top_m))
+        return out
 
     def top(self, ob: Obstacle) -> float:
         """The top [m] a swing clears over ``ob``: its known top, or with
