@@ -50,9 +50,8 @@ class DisturbanceObserverConfig:
     max_torque_nm: float = bounded(20.0, "[0, 200] N m", "a torque", "80 N at 0.25 m")
     # Whether tau_ext enters the MPC (it is estimated and logged either way). Off: in
     # undisturbed walking the torque channel reads a steady -0.1 N m about y, a model
-    # error (0.6 mm of CoM offset under the robot's weight), not a disturbance, and
-    # planning with it moved the CoM 3 cm off the unobserved run's path within 3 s
-    # (tuning stones, seed 147). docs/design/disturbance_observer.md.
+    # error (0.6 mm of CoM offset under the robot's weight), not a disturbance
+    # (docs/design/disturbance_observer.md).
     torque_to_mpc: bool = False
     # The MPC plans with f_ext only once its magnitude exceeds this (below: zero). In
     # undisturbed walking the estimate stays under 1.1 N (flat, seeded stones), and
@@ -103,15 +102,15 @@ class MomentumObserver:
         modelled[:3] = self._weight
         for foot in FEET:
             w = state.foot_wrench_world[foot]
-            r = state.foot_pos_world_m[foot] - com
+            arm = state.foot_pos_world_m[foot] - com
             modelled[:3] += w[:3]
             # (p_i - c) x f_i + tau_i, written out: np.cross costs 14 us a call, this 2
-            modelled[3] += (r[1] * w[2] - r[2] * w[1]) + w[3]
-            modelled[4] += (r[2] * w[0] - r[0] * w[2]) + w[4]
-            modelled[5] += (r[0] * w[1] - r[1] * w[0]) + w[5]
+            modelled[3] += (arm[1] * w[2] - arm[2] * w[1]) + w[3]
+            modelled[4] += (arm[2] * w[0] - arm[0] * w[2]) + w[4]
+            modelled[5] += (arm[0] * w[1] - arm[1] * w[0]) + w[5]
         self._integral += dt * (modelled + self.wrench)
         r = self.config.bandwidth_radps * (h - self._h0 - self._integral)
-        self.wrench = np.minimum(np.maximum(r, -self._limit), self._limit)
+        self.wrench = np.minimum(np.maximum(r, -self._limit), self._limit)  # a new array
         return self.wrench
 
     def mpc_wrench(self) -> np.ndarray:

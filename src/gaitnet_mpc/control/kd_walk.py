@@ -184,10 +184,12 @@ class KDWalkController(WalkingBase):
             yaw_rad=float(state.base_rpy_rad[2]),
             cmd_yaw_rate_radps=cmd.yaw_rate_radps,
         )
-        stance_z = state.foot_pos_world_m[self.schedule.stance_foot][2]  # blind: its height
-        ground = stance_z - self.robot.spec.foot_contact_radius_m if self.search else self.ground_z
+        r = self.robot.spec.foot_contact_radius_m
+        ground = self.ground_z
+        if self.search is not None:  # blind: the height of the stance foot's sole
+            ground = state.foot_pos_world_m[self.schedule.stance_foot][2] - r
         z = self.terrain.foothold_height_m(p[0], p[1], ground)
-        p[2] = z + self.robot.spec.foot_contact_radius_m
+        p[2] = z + r
         if self.robot.spec.planar:
             p[1] = state.foot_pos_world_m[foot][1]
         return p
@@ -430,7 +432,7 @@ class KDWalkController(WalkingBase):
         if td is not None and self.swing is not None:
             td = td.copy()
             c = self.config
-            td[2] -= c.blind_search_depth_m if self.search else c.touchdown_depth_m
+            td[2] -= c.touchdown_depth_m if self.search is None else c.blind_search_depth_m
             if sched.phase_in_step < self.config.retarget_until_phase:
                 start = self.liftoff[swing]
                 self.swing.retarget(

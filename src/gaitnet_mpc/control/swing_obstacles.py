@@ -22,15 +22,10 @@ from gaitnet_mpc.kinematics.shank_clearance import shank_capsules, swing_shank_c
 from gaitnet_mpc.mpc.sequential import SequentialResult
 from gaitnet_mpc.robots import RobotModel
 from gaitnet_mpc.state import RobotState
-from gaitnet_mpc.terrain import Obstacle, Patch
+from gaitnet_mpc.terrain import Obstacle
 
 #: Gap between the foot at a swing's end and the part of its patch it clears [m].
 _EDGE_GAP_M = 0.01
-
-
-def _contains(p: Patch, point: np.ndarray) -> bool:
-    """Whether ``point``'s (x, y) lies on ``p``."""
-    return p.x_min <= point[0] <= p.x_max and p.y_min <= point[1] <= p.y_max
 
 
 def _footprint(ob: Obstacle) -> tuple[float, ...]:
@@ -85,8 +80,8 @@ class SwingObstacles:
         the other foot) would lift the whole swing. Level ground gives none, so swings
         there are unchanged."""
         patches = self.terrain.patches_crossed(*start[:2], *target[:2])
-        first = [p for p in patches if _contains(p, start)]
-        last = [p for p in patches if _contains(p, target)]
+        first = [p for p in patches if p.contains(*start[:2])]
+        last = [p for p in patches if p.contains(*target[:2])]
         if not first or not last:  # an end over a hole: its height is not known here
             return []
         lower = min(first[0].z_top_m, last[0].z_top_m) + 1e-3  # the lower end, + 1 mm
@@ -98,7 +93,7 @@ class SwingObstacles:
                 continue
             lo, hi = p.x_min, p.x_max
             for end, sign in ((start, ahead), (target, -ahead)):  # off the foot at each end
-                if _contains(p, end):
+                if p.contains(*end[:2]):
                     lo, hi = (
                         (max(lo, end[0] + reach), hi) if sign > 0 else (lo, min(hi, end[0] - reach))
                     )

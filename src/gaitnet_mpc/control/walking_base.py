@@ -78,7 +78,7 @@ class WalkingBase(Controller):
             step_end_s=sched.step_start_time_s + sched.current_step_duration_s,
             prediction=self._prediction(),
             heading_rad=self.profile.heading_rad(sched.time_s),
-            wrench_ext=None if self.observer is None else self.observer.wrench.copy(),
+            wrench_ext=None if self.observer is None else self.observer.wrench,
         )
 
     def _commanded_path_xy(self, t_s: float) -> np.ndarray:
