@@ -95,6 +95,23 @@ def test_training_learns_and_numpy_inference_matches_torch(tmp_path):
         assert "feature_names" in f.files
 
 
+def test_training_on_listed_features(tmp_path):
+    """``--features a,b``: the net takes exactly those inputs, in that order; a name that is
+    not a feature, or one listed twice, is refused before any training."""
+    pytest.importorskip("torch")
+    from gaitnet_mpc.gaitnet.fit import feature_subset
+
+    names = ("left_foot_x_m", "com_vx_mps")
+    cfg = TrainConfig(hidden=(8,), members=1, epochs=5, patience=5, seed=0)
+    result, report, selection = fit(_synthetic(), ",".join(names), cfg, progress=False)
+    assert selection is None and report.feature_names == names
+    assert GaitNet(result.weights).feature_names == names
+    for bad in ("com_vx_mps,nope", "com_vx_mps,com_vx_mps", ","):
+        with pytest.raises(ConfigError, match="--features"):
+            feature_subset(bad)
+    assert feature_subset("pca") is None and feature_subset("full") is None
+
+
 def test_spread_grows_outside_the_training_data():
     pytest.importorskip("torch")
     data = _synthetic()
@@ -155,6 +172,10 @@ def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path)
     assert np.all((chosen >= 0.045 - 1e-12) & (chosen <= 0.07 + 1e-12))
     np.testing.assert_allclose(summary["step_durations_s"], 5 * chosen, atol=1e-3)
     assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
+    # each decision records the net's input: 16 features, the CoM above the stance foot
+    feats = np.array([d["features"] for d in policy["steps"]])
+    assert feats.shape == (len(steps), len(FEATURE_NAMES))
+    assert np.all(np.abs(feats[:, FEATURE_NAMES.index("com_z_m")] - 0.54) < 0.05)
     events = (tmp_path / "events.csv").read_text().splitlines()
     assert not [e for e in events if ",slip," in e or ",pivot," in e]
 

@@ -15,7 +15,12 @@ def add_parser(sub: Any) -> None:
         help=SUMMARY,
     )
     t.add_argument("--data", type=Path, required=True, help="data-set folder (collect --out)")
-    t.add_argument("--features", choices=("pca", "full"), default="pca", help="default: pca")
+    t.add_argument(
+        "--features",
+        default="pca",
+        help="pca (default: one feature per principal axis, paper Sec. IV-A2), full (all 16), "
+        "or feature names separated by commas",
+    )
     t.add_argument(
         "--out",
         type=Path,

@@ -49,11 +49,30 @@ class FitReport:
         return asdict(self)
 
 
+def feature_subset(kind: str) -> tuple[str, ...] | None:
+    """The feature names of ``kind`` when it lists them (``"com_x_m,com_vx_mps"``), None
+    for a named set (:data:`FEATURE_SETS`).
+
+    Raises:
+        ConfigError: ``kind`` is neither a named set nor a list of known feature names.
+    """
+    if kind in FEATURE_SETS:
+        return None
+    names = tuple(n.strip() for n in kind.split(",") if n.strip())
+    unknown = [n for n in names if n not in FEATURE_NAMES]
+    if not names or unknown or len(set(names)) != len(names):
+        raise ConfigError(
+            "--features", kind,
+            f"one of {list(FEATURE_SETS)}, or distinct names from {list(FEATURE_NAMES)} "
+            "separated by commas",
+        )  # fmt: skip
+    return names
+
+
 def select_features(data: GaitData, train: np.ndarray, kind: str) -> PCASelection | None:
-    """The PCA selection on the training rows (``kind == "pca"``), or None (all 16)."""
-    if kind not in FEATURE_SETS:
-        raise ConfigError("--features", kind, f"one of {list(FEATURE_SETS)}")
-    if kind == "full":
+    """The PCA selection on the training rows (``kind == "pca"``), or None (all 16, or the
+    names ``kind`` lists: see :func:`feature_subset`)."""
+    if feature_subset(kind) is not None or kind == "full":
         return None
     return pca_select(data.x[train], FEATURE_NAMES)
 
@@ -75,7 +94,13 @@ def fit(
     split = split_by_set(data.set_id, seed=split_seed)
     part = {name: np.isin(data.set_id, getattr(split, name)) for name in ("train", "val", "test")}
     selection = select_features(data, part["train"], kind)
-    cols = list(range(len(FEATURE_NAMES))) if selection is None else list(selection.indices)
+    subset = feature_subset(kind)
+    if selection is not None:
+        cols = list(selection.indices)
+    elif subset is not None:
+        cols = [FEATURE_NAMES.index(n) for n in subset]
+    else:
+        cols = list(range(len(FEATURE_NAMES)))
     names = tuple(FEATURE_NAMES[i] for i in cols)
     x = data.x[:, cols]
     bar, update = _bar(cfg) if progress else (None, None)

@@ -22,7 +22,8 @@ Sec. VI names the failure: dts that do not settle and solves that hit ``j_max``)
   ``frozen``).
 
 Every decision is recorded (``decisions``): time, the dt of each iteration, the spread,
-and the fallback reason if any.
+the fallback reason if any, and the 16 features (``FEATURE_NAMES`` order) of its last call
+to the network.
 """
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ class Decision:
     fallback: str | None = None
     damped: int = 0
     frozen: bool = False
+    features: np.ndarray | None = None  # (16,) the last input the network was given
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -66,6 +68,9 @@ class Decision:
             "spread_max_s": round(max(self.spreads_s, default=0.0), 5),
             "fallback": self.fallback,
             "frozen": self.frozen,
+            "features": None
+            if self.features is None
+            else [round(float(v), 5) for v in self.features],
         }
 
 
@@ -129,6 +134,7 @@ class GaitNetDt:
         x = step_features(
             s.state, s.stance_foot, s.swing_foot, touchdown[s.swing_foot][0], problem.heading_rad
         )
+        d.features = x
         dt, spread = self.net.predict(x[self._columns])
         d.spreads_s.append(spread)
         bounds = self.bounds_s

@@ -27,7 +27,7 @@ from typing import Any
 
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gaitnet.data import load_dataset
-from gaitnet_mpc.gaitnet.fit import FEATURE_SETS, FitReport, fit, write_fit
+from gaitnet_mpc.gaitnet.fit import FitReport, feature_subset, fit, write_fit
 from gaitnet_mpc.gaitnet.model import WEIGHTS_FILE
 from gaitnet_mpc.gaitnet.train import MemberFit, TrainConfig
 from gaitnet_mpc.results.io import write_json_atomic
@@ -95,8 +95,7 @@ def train_folder(
         KeyboardInterrupt: on Ctrl-C / SIGTERM, after writing the status file.
     """
     out = check_model_out(out, overwrite)
-    if features not in FEATURE_SETS:
-        raise ConfigError("--features", features, f"one of {list(FEATURE_SETS)}")
+    feature_subset(features)  # a bad --features fails before any training
     data = load_dataset(data_dir)
     identity = {
         "data_manifest_sha256": data.manifest_sha256,
