@@ -24,10 +24,8 @@ SPEC = EpisodeSpec(seconds=0.5)
 @pytest.fixture(scope="module")
 def episodes() -> dict[str, object]:
     return {
-        "kd": timed_episode(BenchCase("kd"), SPEC),  # one QP per replan (the default)
-        "conv": timed_episode(
-            BenchCase("conv", "kd", ("replan_j_max=50", "warm_start_replans=false")), SPEC
-        ),
+        "kd": timed_episode(BenchCase("kd"), SPEC),
+        "rti": timed_episode(BenchCase("rti", "kd", ("replan_j_max=1",)), SPEC),
     }
 
 
@@ -45,12 +43,12 @@ def test_timed_episode_counts_ticks_and_solves(episodes: dict) -> None:
 
 
 def test_rti_replans_solve_one_qp_and_full_solves_converge(episodes: dict) -> None:
-    rti, conv = episodes["kd"], episodes["conv"]
+    kd, rti = episodes["kd"], episodes["rti"]
     full = np.asarray(rti.full)
     assert set(np.asarray(rti.qps)[~full]) == {1}
-    assert np.mean(np.asarray(conv.qps)[~np.asarray(conv.full)]) > 1.5
+    assert np.mean(np.asarray(kd.qps)[~np.asarray(kd.full)]) > 1.5
     # the first full solve is the same problem in both
-    assert rti.qps[0] == conv.qps[0]
+    assert rti.qps[0] == kd.qps[0]
 
 
 def test_combine_takes_the_minimum_per_solve_and_reports(episodes: dict) -> None:

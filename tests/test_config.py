@@ -44,16 +44,14 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
         cop_fraction=1.0,
         dt_policy=DtPolicyConfig(gaitnet=GaitNetPolicyConfig(safeguards=False)),
         disturbance_observer=None,
-        replan_j_max=50,  # converging replans: the default until the RTI replan became it
-        warm_start_replans=False,
     )
 
 
 def _default_walk_config(planar: bool) -> KDWalkConfig:
     """The default preset: ``KDWalkConfig()``; on a planar robot with the biped's foothold
     margin (its 0.02 m point foot + 5 mm) and without the humanoid's trunk settings
-    (roll / pitch pose weight 6000, trunk roll / pitch feedback, the disturbance observer,
-    one QP per replan; kd-default.planar.toml)."""
+    (roll / pitch pose weight 6000, trunk roll / pitch feedback, the disturbance observer;
+    kd-default.planar.toml)."""
     config = KDWalkConfig()
     if not planar:
         return config
@@ -66,8 +64,6 @@ def _default_walk_config(planar: bool) -> KDWalkConfig:
             config.low_level, stance_tilt_kp_nm_per_rad=0.0, stance_tilt_kd_nms_per_rad=0.0
         ),
         disturbance_observer=None,
-        replan_j_max=50,  # the biped keeps converging replans (kd-default.planar.toml)
-        warm_start_replans=False,
     )
 
 

@@ -172,9 +172,7 @@ def test_kd_walks_over_a_small_gap(humanoid) -> None:
     assert summary["self_collisions"] == 0
     assert summary["distance_m"] > 1.1  # past the gap's far edge (0.9 m) by a margin
     assert any(f["pos_m"][0] > 0.95 for f in summary["footholds"])
-    # every step start converges; a replan within a step is one QP (the default)
-    assert summary["mpc"]["full_not_converged_fraction"] < 0.1
-    assert summary["mpc"]["qps_per_replan_mean"] == 1.0
+    assert summary["mpc"]["converged_fraction"] > 0.9
     holds = ctrl.planned_footholds()  # the next touchdown of each foot (drawn in videos)
     assert sorted(f for f, _ in holds) == ["left", "right"]
     assert all(p[0] > summary["distance_m"] - 0.3 for _, p in holds)
@@ -401,7 +399,7 @@ def test_warm_started_replans_start_from_the_last_plan(humanoid) -> None:
     first_steps: dict[bool, list[float]] = {}
     for warm in (False, True):
         sim = Simulator(humanoid, course)
-        config = replace(KDWalkConfig(), warm_start_replans=warm, replan_j_max=50)
+        config = replace(KDWalkConfig(), warm_start_replans=warm)
         ctrl = KDWalkController(humanoid, TerrainView(course), command, config=config)
         sub, mpc = ctrl.mpc.subproblem, ctrl.mpc
         solve, mpc_solve, steps, firsts = sub.solve, mpc.solve, [], []

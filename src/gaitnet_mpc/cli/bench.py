@@ -31,8 +31,8 @@ def add_parser(sub: Any) -> None:
         action="append",
         default=None,
         metavar="LABEL=CONTROLLER[:KEY=VALUE,...]",
-        help="a case to time (repeatable); default: kd and gaitnet, each as shipped (one QP "
-        "per replan) and with converging replans (replan_j_max=50)",
+        help="a case to time (repeatable); default: kd and gaitnet, each as shipped and "
+        "with RTI replans (--preset realtime)",
     )
     b.add_argument("--course", default="flat", help="built-in course (default: %(default)s)")
     b.add_argument("--vx", type=float, default=0.75, help="m/s (default: %(default)s)")

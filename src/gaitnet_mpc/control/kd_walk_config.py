@@ -99,13 +99,12 @@ class KDWalkConfig:
 
     replan_period_s: float = bounded(0.02, PERIOD_INTERVAL, "a period", PERIOD_REASON)
     # QPs at most per replan within a step (a step start always runs up to
-    # ``sequential.j_max``). 1 (default): the real-time-iteration replan, one QP from the
-    # new state; the paper iterates every solve to convergence (``--preset paper``: 50).
-    # docs/design/realtime.md item 22 gives the measured outcomes of both.
-    replan_j_max: int = bounded(1, "[1, 1000]", "an integer", "1: one QP per replan")
+    # ``sequential.j_max``). 1: the real-time-iteration replan (one QP from the new state,
+    # benchmarks/results/replan_outcomes.md and perf.md measure what it costs and saves).
+    replan_j_max: int = bounded(50, "[1, 1000]", "an integer", "1: one QP per replan")
     # A replan starts its iterations from the last plan shifted to the new horizon
     # (mpc/kd_iterate.py shift_iterate), not from the references (KDIterate.initial).
-    warm_start_replans: bool = True
+    warm_start_replans: bool = False
     # the command is ramped up from rest at this rate
     max_accel_mps2: float = bounded(1.0, ACCEL_INTERVAL, "an acceleration", ACCEL_REASON)
     sequential: SequentialConfig = field(

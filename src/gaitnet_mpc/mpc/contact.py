@@ -6,7 +6,7 @@ long axis, pitch moment bounded by f_z times the toe/heel distance, and a yaw mo
 by friction over the foot's half length. A point foot carries no moment at all.
 
 :class:`StanceWrenchRows` evaluates the stance rows of one foot model at every stage and
-foot of an MPC horizon, memoised by yaw (the yaws repeat within and across solves).
+foot of an MPC horizon in one vectorised pass.
 """
 
 from __future__ import annotations
@@ -91,40 +91,57 @@ def foot_wrench_constraints(
 
 
 class StanceWrenchRows:
-    """Stance rows of :func:`foot_wrench_constraints` for one foot model, memoised by yaw.
+    """Stance rows of :func:`foot_wrench_constraints` for one foot model, at many yaws.
+
+    Only three rows of a line foot depend on its yaw, through ``cos`` and ``sin`` (the
+    long axis and the lateral axis); the others are the same at every yaw. So the rows at
+    all yaws of a horizon are the rows at yaw 0 with those entries written in one
+    vectorised pass, equal bit for bit to :func:`foot_wrench_constraints` at each yaw
+    (checked at construction).
 
     Args:
         params: friction and normal-force limits.
         toe_m, heel_m: line-foot lengths [m] (both 0: point foot).
-        cache_size: memoised yaws kept before the memo is cleared.
     """
 
-    def __init__(
-        self, params: ContactParams, toe_m: float, heel_m: float, cache_size: int = 256
-    ) -> None:
+    #: Rows of a line foot whose moment columns (3, 4) follow the yaw: the long axis
+    #: ``(cos, sin)`` and, twice, the lateral axis ``(-sin, cos)`` (foot_wrench_constraints).
+    _AXIS_ROW, _LATERAL_ROWS = 5, (6, 7)
+
+    def __init__(self, params: ContactParams, toe_m: float, heel_m: float) -> None:
         self.params = params
         self.toe_m = toe_m
         self.heel_m = heel_m
-        self.cache_size = cache_size
-        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
+        c_rows, lo, hi = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
+        self._base = (c_rows, lo, hi)
+        self._line_foot = not (toe_m == 0.0 and heel_m == 0.0)
         #: Stance rows per foot (the same at every yaw).
         self.n_rows = int(c_rows.shape[0])
         #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
         self.full_column_rank = bool(np.linalg.matrix_rank(c_rows) == 6)
-        self._cache: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._last: tuple[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        check = np.array([0.7, -2.9])
+        for got, want in zip(self._rows(check), zip(*(
+            foot_wrench_constraints(y, params, toe_m, heel_m, True) for y in check
+        ), strict=True), strict=True):  # fmt: skip
+            if not np.array_equal(got, np.stack(want)):  # pragma: no cover - model change
+                raise ConfigError("foot_wrench_constraints", "its row layout", "rows 5-7 by yaw")
 
-    def at(self, yaw_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Stance rows ``C`` (m, 6) and bounds ``l, u`` (m,) at ``yaw_rad``, memoised."""
-        rows = self._cache.get(yaw_rad)
-        if rows is None:
-            rows = foot_wrench_constraints(yaw_rad, self.params, self.toe_m, self.heel_m, True)
-            if rows[0].shape[0] != self.n_rows:  # pragma: no cover - model change
-                raise ConfigError("foot_yaw_rad", yaw_rad, "a yaw with the stance row count")
-            if len(self._cache) >= self.cache_size:
-                self._cache.clear()
-            self._cache[yaw_rad] = rows
-        return rows
+    def _rows(self, yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rows (n, m, 6) and bounds (n, m) at the yaws ``yaw_rad`` (n,)."""
+        c_rows, lo, hi = self._base
+        n = yaw_rad.size
+        rows = np.broadcast_to(c_rows, (n, *c_rows.shape)).copy()
+        if self._line_foot:
+            c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+            rows[:, self._AXIS_ROW, 3], rows[:, self._AXIS_ROW, 4] = c, s
+            for r in self._LATERAL_ROWS:
+                rows[:, r, 3], rows[:, r, 4] = -s, c
+        return (
+            rows,
+            np.broadcast_to(lo, (n, lo.size)).copy(),
+            np.broadcast_to(hi, (n, hi.size)).copy(),
+        )
 
     def stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Stance rows ``C`` (..., m, 6) and bounds ``l, u`` (..., m) at every yaw of
@@ -133,13 +150,9 @@ class StanceWrenchRows:
         key = foot_yaw_rad.tobytes()
         if self._last is not None and self._last[0] == key:
             return self._last[1]
-        rows = [self.at(yaw) for yaw in foot_yaw_rad.ravel().tolist()]
+        rows, lo, hi = self._rows(np.asarray(foot_yaw_rad, dtype=float).ravel())
         shape = (*foot_yaw_rad.shape, self.n_rows)
-        out = (
-            np.stack([r[0] for r in rows]).reshape(*shape, 6),
-            np.stack([r[1] for r in rows]).reshape(shape),
-            np.stack([r[2] for r in rows]).reshape(shape),
-        )
+        out = (rows.reshape(*shape, 6), lo.reshape(shape), hi.reshape(shape))
         for arr in out:
             arr.flags.writeable = False
         self._last = (key, out)

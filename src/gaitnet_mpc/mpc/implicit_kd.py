@@ -123,7 +123,6 @@ from gaitnet_mpc.mpc.qp.pattern import BlockPattern
 #: Bound of a "free" foot tie row [m]: finite so that no row has two infinite bounds (PIQP
 #: drops such rows, which would change the pattern whenever the contact schedule changes).
 _FREE_TIE_M = 1e3
-_WRENCH_CACHE_SIZE = 256  # memoised foot_wrench_constraints rows, keyed by yaw
 
 
 # --------------------------------------------------------------------------- sub-problem
@@ -149,7 +148,7 @@ class KDSubproblem:
         self.n = lay.n
         self._col_x, self._col_pc = lay.col_x, lay.col_pc
         self._col_f, self._col_tau, self._col_pf = lay.col_f, lay.col_tau, lay.col_pf
-        self._wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m, _WRENCH_CACHE_SIZE)
+        self._wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m)
         self.n_wrench_rows = self._wrench.n_rows
         if not self._wrench.full_column_rank:  # pragma: no cover - contact model change
             raise ConfigError("contact", c.contact, "stance wrench rows of full column rank")
