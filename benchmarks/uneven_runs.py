@@ -5,7 +5,7 @@ one episode walks them; the report counts falls and clean runs (no fall, no viol
 leg contact) and lists the seeds that were not clean.
 
     .venv/bin/python benchmarks/uneven_runs.py --amplitude 0.05 --speed 0.75 --seeds 20 \
-        [--seed-offset 100] [--blind] [--jobs 2] [--out NAME.md]
+        [--seed-offset 100] [--blind] [--set KEY=VALUE] [--jobs 2] [--out NAME.md]
 """
 
 from __future__ import annotations
@@ -22,7 +22,9 @@ from common import clean_run, command_line, machine_info, run_pool, write_report
 DURATION_S = 14.0
 
 
-def run(seed: int, amplitude_m: float, speed_mps: float, blind: bool) -> dict:
+def run(
+    seed: int, amplitude_m: float, speed_mps: float, blind: bool, overrides: tuple[str, ...] = ()
+) -> dict:
     from gaitnet_mpc.scenario import make_scenario, run_scenario
     from gaitnet_mpc.terrain.builtin_courses import uneven_course
 
@@ -34,7 +36,7 @@ def run(seed: int, amplitude_m: float, speed_mps: float, blind: bool) -> dict:
             course=str(path),
             vx_mps=speed_mps,
             duration_s=DURATION_S,
-            overrides=("blind=true",) if blind else (),
+            overrides=(*overrides, *(("blind=true",) if blind else ())),
         )
         s = run_scenario(scenario)
     return {
@@ -54,10 +56,19 @@ def main() -> None:
     parser.add_argument("--seed-offset", type=int, default=0, help="first seed (tuning: 100)")
     parser.add_argument("--blind", action="store_true", help="the controller is told no terrain")
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="as `gaitnet-mpc run`"
+    )
     parser.add_argument("--out", default=None, help="report name in benchmarks/results/")
     args = parser.parse_args()
     seeds = list(range(args.seed_offset, args.seed_offset + args.seeds))
-    worker = partial(run, amplitude_m=args.amplitude, speed_mps=args.speed, blind=args.blind)
+    worker = partial(
+        run,
+        amplitude_m=args.amplitude,
+        speed_mps=args.speed,
+        blind=args.blind,
+        overrides=tuple(args.set),
+    )
     t0 = time.perf_counter()
     results = run_pool(
         worker, seeds, args.jobs, describe=lambda s, r: f"seed {s}: clean {r['clean']}"
@@ -71,7 +82,8 @@ def main() -> None:
         "",
         machine_info(("numpy", "mujoco", "pin")),
         "",
-        f"humanoid3d, default settings, {knowledge}; seeds {seeds[0]}-{seeds[-1]}"
+        f"humanoid3d, {'settings ' + ', '.join(args.set) if args.set else 'default settings'}, "
+        f"{knowledge}; seeds {seeds[0]}-{seeds[-1]}"
         f"{' (tuning seeds)' if args.seed_offset else ''}, {DURATION_S:g} s each; tiles of "
         "0.25 x 0.5 m from x = 0.8 to 6.05 m (`uneven_course`).",
         "",

@@ -5,6 +5,14 @@ Friction pyramid (paper eqs. 21-22) with mu_box = mu * sqrt(2) / 2, normal-force
 long axis, pitch moment bounded by f_z times the toe/heel distance, and a yaw moment bounded
 by friction over the foot's half length. A point foot carries no moment at all.
 
+The yaw bound ``|m_z| <= mu half f_z`` (``ContactParams.yaw_moment = "line"``) holds only
+while the normal force is shared by both ends. The contact wrench cone of a rectangle
+(Caron, Pham and Nakamura, ICRA 2015, closed form) taken for the segment of half length
+``X`` (zero width, no moment about the axis) gives, in the foot frame,
+``-mu X f_z + |X f_lat - mu m_lat| <= m_z <= mu X f_z - |X f_lat + mu m_lat|``: with the
+centre of pressure at an end (``m_lat = -+X f_z``) the foot holds only the yaw moment of its
+lateral force at that end, ``X f_lat`` (``"cwc"``, four rows).
+
 :class:`StanceWrenchRows` evaluates the stance rows of one foot model at every stage and
 foot of an MPC horizon in one vectorised pass.
 """
@@ -19,6 +27,7 @@ from gaitnet_mpc.config import bounded, check_ranges
 from gaitnet_mpc.errors import ConfigError
 
 INF = np.inf
+YAW_MOMENT_MODELS = ("line", "cwc")
 _MU = "> 0 to walk; 2 is past rubber on concrete (about 1)"
 _FZ_MAX = "2000 N is 13 times the 16 kg humanoid's weight"
 
@@ -30,11 +39,17 @@ class ContactParams:
     mu: float = bounded(0.7, "(0, 2]", "a friction coefficient", _MU)
     fz_min_n: float = bounded(10.0, "[0, 2000] N", "a normal force", "a foot cannot pull")
     fz_max_n: float = bounded(500.0, "(0, 2000] N", "a normal force", _FZ_MAX)
+    # The yaw moment a line foot can hold. "line": |m_z| <= mu half f_z, as if the normal
+    # force sat at both ends. "cwc": the contact wrench cone of the segment (module
+    # docstring), where a centre of pressure near one end, or a lateral force, leaves less.
+    yaw_moment: str = "line"
 
     def __post_init__(self) -> None:
         check_ranges(self)
         if self.fz_min_n > self.fz_max_n:
             raise ConfigError("fz_min_n", self.fz_min_n, f"<= fz_max_n = {self.fz_max_n} N")
+        if self.yaw_moment not in YAW_MOMENT_MODELS:
+            raise ConfigError("yaw_moment", self.yaw_moment, f"one of {list(YAW_MOMENT_MODELS)}")
 
     @property
     def mu_box(self) -> float:
@@ -53,95 +68,78 @@ def foot_wrench_constraints(
 
     In swing (``in_stance=False``) the whole wrench is bounded to zero (eq. 23 with sigma=0).
     """
+    if not in_stance:
+        return np.eye(6), np.zeros(6), np.zeros(6)
+    rows, lo, hi = _stance_rows(np.array([yaw_rad], dtype=float), params, toe_m, heel_m)
+    return rows[0], lo, hi
+
+
+def _stance_rows(
+    yaw_rad: np.ndarray, params: ContactParams, toe_m: float, heel_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stance rows ``C`` (n, m, 6) at the yaws ``yaw_rad`` (n,), bounds ``l, u`` (m,)."""
+    n = yaw_rad.size
     c_yaw, s_yaw = np.cos(yaw_rad), np.sin(yaw_rad)
-    axis = np.array([c_yaw, s_yaw, 0.0])  # foot long axis (toe direction)
-    lateral = np.array([-s_yaw, c_yaw, 0.0])
+    zero = np.zeros(n)
+    axis = np.stack([c_yaw, s_yaw, zero], axis=1)  # (n, 3) foot long axis (toe direction)
+    lateral = np.stack([-s_yaw, c_yaw, zero], axis=1)
     mu = params.mu_box
     rows: list[np.ndarray] = []
     lo: list[float] = []
     hi: list[float] = []
 
-    def add(row: np.ndarray, lower: float, upper: float) -> None:
-        rows.append(row)
+    def add(force: np.ndarray, moment: np.ndarray, lower: float, upper: float) -> None:
+        """One row ``force . f + moment . m``, each part (3,) or (n, 3)."""
+        parts = [np.broadcast_to(force, (n, 3)), np.broadcast_to(moment, (n, 3))]
+        rows.append(np.concatenate(parts, axis=1))
         lo.append(lower)
         hi.append(upper)
 
-    if not in_stance:
-        for i in range(6):
-            add(np.eye(6)[i], 0.0, 0.0)
-        return np.array(rows), np.array(lo), np.array(hi)
-    ez = np.array([0.0, 0.0, 1.0])
-    add(np.r_[ez, 0, 0, 0], params.fz_min_n, params.fz_max_n)
+    ez, none = np.array([0.0, 0.0, 1.0]), np.zeros(3)
+    add(ez, none, params.fz_min_n, params.fz_max_n)
     for tangent in (np.array([1.0, 0, 0]), np.array([0, 1.0, 0])):
-        add(np.r_[tangent - mu * ez, 0, 0, 0], -INF, 0.0)  # f_t <= mu f_z
-        add(np.r_[tangent + mu * ez, 0, 0, 0], 0.0, INF)  # f_t >= -mu f_z
+        add(tangent - mu * ez, none, -INF, 0.0)  # f_t <= mu f_z
+        add(tangent + mu * ez, none, 0.0, INF)  # f_t >= -mu f_z
     if toe_m == 0.0 and heel_m == 0.0:
         for i in range(3):
-            add(np.eye(6)[3 + i], 0.0, 0.0)
-        return np.array(rows), np.array(lo), np.array(hi)
-    add(np.r_[0, 0, 0, axis], 0.0, 0.0)  # no moment about the line
-    # Pitch moment about the lateral axis: the CoP stays between heel and toe.
-    # m_lat = -(x_cop) f_z along the axis, so -toe f_z <= m_lat <= heel f_z.
-    add(np.r_[toe_m * ez, lateral], 0.0, INF)
-    add(np.r_[-heel_m * ez, lateral], -INF, 0.0)
-    half = 0.5 * (toe_m + heel_m)
-    add(np.r_[-mu * half * ez, ez], -INF, 0.0)  # |m_z| <= mu * half length * f_z
-    add(np.r_[mu * half * ez, ez], 0.0, INF)
-    return np.array(rows), np.array(lo), np.array(hi)
+            add(none, np.eye(3)[i], 0.0, 0.0)
+    else:
+        add(none, axis, 0.0, 0.0)  # no moment about the line
+        # Pitch moment about the lateral axis: the CoP stays between heel and toe.
+        # m_lat = -(x_cop) f_z along the axis, so -toe f_z <= m_lat <= heel f_z.
+        add(toe_m * ez, lateral, 0.0, INF)
+        add(-heel_m * ez, lateral, -INF, 0.0)
+        half = 0.5 * (toe_m + heel_m)
+        if params.yaw_moment == "line":
+            add(-mu * half * ez, ez, -INF, 0.0)  # |m_z| <= mu * half length * f_z
+            add(mu * half * ez, ez, 0.0, INF)
+        else:  # the segment's wrench cone (module docstring): m_z <= mu half f_z -
+            # |half f_lat + mu m_lat| and m_z >= -mu half f_z + |half f_lat - mu m_lat|
+            for sign in (1.0, -1.0):
+                add(sign * half * lateral - mu * half * ez, ez + sign * mu * lateral, -INF, 0.0)
+                add(sign * half * lateral - mu * half * ez, -ez - sign * mu * lateral, -INF, 0.0)
+    return np.stack(rows, axis=1), np.array(lo), np.array(hi)
 
 
 class StanceWrenchRows:
-    """Stance rows of :func:`foot_wrench_constraints` for one foot model, at many yaws.
-
-    Only three rows of a line foot depend on its yaw, through ``cos`` and ``sin`` (the
-    long axis and the lateral axis); the others are the same at every yaw. So the rows at
-    all yaws of a horizon are the rows at yaw 0 with those entries written in one
-    vectorised pass, equal bit for bit to :func:`foot_wrench_constraints` at each yaw
-    (checked at construction).
+    """Stance rows of :func:`foot_wrench_constraints` for one foot model at every yaw of a
+    horizon, in one vectorised pass.
 
     Args:
         params: friction and normal-force limits.
         toe_m, heel_m: line-foot lengths [m] (both 0: point foot).
     """
 
-    #: Rows of a line foot whose moment columns (3, 4) follow the yaw: the long axis
-    #: ``(cos, sin)`` and, twice, the lateral axis ``(-sin, cos)`` (foot_wrench_constraints).
-    _AXIS_ROW, _LATERAL_ROWS = 5, (6, 7)
-
     def __init__(self, params: ContactParams, toe_m: float, heel_m: float) -> None:
         self.params = params
         self.toe_m = toe_m
         self.heel_m = heel_m
-        c_rows, lo, hi = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
-        self._base = (c_rows, lo, hi)
-        self._line_foot = not (toe_m == 0.0 and heel_m == 0.0)
+        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
         #: Stance rows per foot (the same at every yaw).
         self.n_rows = int(c_rows.shape[0])
         #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
         self.full_column_rank = bool(np.linalg.matrix_rank(c_rows) == 6)
         self._last: tuple[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
-        check = np.array([0.7, -2.9])
-        for got, want in zip(self._rows(check), zip(*(
-            foot_wrench_constraints(y, params, toe_m, heel_m, True) for y in check
-        ), strict=True), strict=True):  # fmt: skip
-            if not np.array_equal(got, np.stack(want)):  # pragma: no cover - model change
-                raise ConfigError("foot_wrench_constraints", "its row layout", "rows 5-7 by yaw")
-
-    def _rows(self, yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Rows (n, m, 6) and bounds (n, m) at the yaws ``yaw_rad`` (n,)."""
-        c_rows, lo, hi = self._base
-        n = yaw_rad.size
-        rows = np.broadcast_to(c_rows, (n, *c_rows.shape)).copy()
-        if self._line_foot:
-            c, s = np.cos(yaw_rad), np.sin(yaw_rad)
-            rows[:, self._AXIS_ROW, 3], rows[:, self._AXIS_ROW, 4] = c, s
-            for r in self._LATERAL_ROWS:
-                rows[:, r, 3], rows[:, r, 4] = -s, c
-        return (
-            rows,
-            np.broadcast_to(lo, (n, lo.size)).copy(),
-            np.broadcast_to(hi, (n, hi.size)).copy(),
-        )
 
     def stack(self, foot_yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Stance rows ``C`` (..., m, 6) and bounds ``l, u`` (..., m) at every yaw of
@@ -150,9 +148,14 @@ class StanceWrenchRows:
         key = foot_yaw_rad.tobytes()
         if self._last is not None and self._last[0] == key:
             return self._last[1]
-        rows, lo, hi = self._rows(np.asarray(foot_yaw_rad, dtype=float).ravel())
+        yaw = np.asarray(foot_yaw_rad, dtype=float).ravel()
+        rows, lo, hi = _stance_rows(yaw, self.params, self.toe_m, self.heel_m)
         shape = (*foot_yaw_rad.shape, self.n_rows)
-        out = (rows.reshape(*shape, 6), lo.reshape(shape), hi.reshape(shape))
+        out = (
+            rows.reshape(*shape, 6),
+            np.broadcast_to(lo, shape).copy(),
+            np.broadcast_to(hi, shape).copy(),
+        )
         for arr in out:
             arr.flags.writeable = False
         self._last = (key, out)
