@@ -74,6 +74,18 @@ def test_stacked_rows_equal_the_rows_of_each_yaw() -> None:
                 np.testing.assert_array_equal(hi[idx], one[2])
 
 
+def test_the_cone_can_span_more_than_the_centre_of_pressure_segment() -> None:
+    """``cone_half_m``: the whole foot's cone with the CoP rows' margin; at the CoP limit
+    it still holds a yaw moment (the CoP segment's own cone allows only ``X f_lat``)."""
+    fz = 100.0
+    at_limit = np.array([0.0, 0.0, fz, 0.0, -HALF_M * fz, 0.2 * CWC.mu_box * HALF_M * fz])
+    assert not _inside(foot_wrench_constraints(0.0, CWC, HALF_M, HALF_M), at_limit)
+    rows = foot_wrench_constraints(0.0, CWC, HALF_M, HALF_M, cone_half_m=0.075)
+    assert _inside(rows, at_limit)
+    c = StanceWrenchRows(CWC, HALF_M, HALF_M, 0.075).stack(np.zeros((1, 1)))[0]
+    np.testing.assert_array_equal(c[0, 0], rows[0])
+
+
 def test_an_unknown_yaw_moment_model_is_refused() -> None:
     with pytest.raises(ConfigError, match="yaw_moment"):
         ContactParams(yaw_moment="disc")

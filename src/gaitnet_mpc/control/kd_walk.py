@@ -94,6 +94,7 @@ class KDWalkController(WalkingBase):
             mass_kg=robot.total_mass_kg,
             toe_m=self.config.cop_fraction * robot.spec.foot_toe_m,
             heel_m=self.config.cop_fraction * robot.spec.foot_heel_m,
+            yaw_cone_half_m=0.5 * (robot.spec.foot_toe_m + robot.spec.foot_heel_m),
             min_foot_separation_m=(
                 robot.min_foot_separation_m if self.config.keep_feet_apart else None
             ),

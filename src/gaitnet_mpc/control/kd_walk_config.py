@@ -24,7 +24,6 @@ from gaitnet_mpc.dt_policy import PERIOD_INTERVAL, PERIOD_REASON, DtPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import SwingConfig
 from gaitnet_mpc.gait.preview import PreviewConfig
-from gaitnet_mpc.mpc.contact import ContactParams
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
 from gaitnet_mpc.mpc.sequential import SequentialConfig
 from gaitnet_mpc.terrain import Course
@@ -52,10 +51,6 @@ def walking_kd_config() -> KDConfig:
         w_pose=(1.0, 1.0, 1.0, 6000.0, 6000.0, 2000.0),
         w_momentum=(10.0, 10.0, 10.0, 100.0, 100.0, 100.0),
         w_p_com=(10.0, 1.0, 250.0),
-        # The stance foot's yaw moment within its segment's wrench cone (mpc/contact.py):
-        # the line bound let plans ask 4x the yaw moment a foot with its centre of pressure
-        # near the toe holds, and the stance foot spun (docs/design/stance_yaw.md).
-        contact=ContactParams(yaw_moment="cwc"),
         # The sub-problem checks its inputs itself; skip the QP layer's second check.
         qp_options=(("check_problem", False),),
     )
@@ -95,7 +90,7 @@ LATERAL_RETURN_TIME_S = 0.7
 
 #: Fields of ``sequential.kd`` the controller sets from the robot, left at their defaults
 #: in a configuration (setting one would silently have no effect).
-ROBOT_FIELDS = ("mass_kg", "toe_m", "heel_m", "min_foot_separation_m")
+ROBOT_FIELDS = ("mass_kg", "toe_m", "heel_m", "yaw_cone_half_m", "min_foot_separation_m")
 
 
 @dataclass(frozen=True)

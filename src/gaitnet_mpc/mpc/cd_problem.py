@@ -140,7 +140,7 @@ def centroidal_problem(solver: SequentialKDMPC, problem: KDProblem) -> CDProblem
     qp = box_sub.build(zero, a)
     assert qp.lb is not None and qp.ub is not None
     col_pf = KDLayout(h).col_pf
-    wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m)
+    wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m, c.yaw_cone_half_m)
     cm, lo, hi = wrench.stack(a.foot_yaw_rad)
     stance = a.contact[:, :, None]
     sep_axis = None

@@ -63,19 +63,28 @@ def foot_wrench_constraints(
     toe_m: float,
     heel_m: float,
     in_stance: bool = True,
+    cone_half_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rows ``C`` (m, 6) and bounds ``l, u`` with ``l <= C [f; m] <= u`` for one foot.
 
     In swing (``in_stance=False``) the whole wrench is bounded to zero (eq. 23 with sigma=0).
+    ``cone_half_m``: half length of the segment of the yaw rows' wrench cone (``"cwc"``);
+    None: ``(toe_m + heel_m) / 2``, the centre-of-pressure rows' segment.
     """
     if not in_stance:
         return np.eye(6), np.zeros(6), np.zeros(6)
-    rows, lo, hi = _stance_rows(np.array([yaw_rad], dtype=float), params, toe_m, heel_m)
+    rows, lo, hi = _stance_rows(
+        np.array([yaw_rad], dtype=float), params, toe_m, heel_m, cone_half_m
+    )
     return rows[0], lo, hi
 
 
 def _stance_rows(
-    yaw_rad: np.ndarray, params: ContactParams, toe_m: float, heel_m: float
+    yaw_rad: np.ndarray,
+    params: ContactParams,
+    toe_m: float,
+    heel_m: float,
+    cone_half_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stance rows ``C`` (n, m, 6) at the yaws ``yaw_rad`` (n,), bounds ``l, u`` (m,)."""
     n = yaw_rad.size
@@ -113,11 +122,12 @@ def _stance_rows(
         if params.yaw_moment == "line":
             add(-mu * half * ez, ez, -INF, 0.0)  # |m_z| <= mu * half length * f_z
             add(mu * half * ez, ez, 0.0, INF)
-        else:  # the segment's wrench cone (module docstring): m_z <= mu half f_z -
-            # |half f_lat + mu m_lat| and m_z >= -mu half f_z + |half f_lat - mu m_lat|
+        else:  # the segment's wrench cone (module docstring): m_z <= mu x f_z -
+            # |x f_lat + mu m_lat| and m_z >= -mu x f_z + |x f_lat - mu m_lat|
+            x = half if cone_half_m is None else cone_half_m
             for sign in (1.0, -1.0):
-                add(sign * half * lateral - mu * half * ez, ez + sign * mu * lateral, -INF, 0.0)
-                add(sign * half * lateral - mu * half * ez, -ez - sign * mu * lateral, -INF, 0.0)
+                add(sign * x * lateral - mu * x * ez, ez + sign * mu * lateral, -INF, 0.0)
+                add(sign * x * lateral - mu * x * ez, -ez - sign * mu * lateral, -INF, 0.0)
     return np.stack(rows, axis=1), np.array(lo), np.array(hi)
 
 
@@ -128,13 +138,21 @@ class StanceWrenchRows:
     Args:
         params: friction and normal-force limits.
         toe_m, heel_m: line-foot lengths [m] (both 0: point foot).
+        cone_half_m: as :func:`foot_wrench_constraints`.
     """
 
-    def __init__(self, params: ContactParams, toe_m: float, heel_m: float) -> None:
+    def __init__(
+        self,
+        params: ContactParams,
+        toe_m: float,
+        heel_m: float,
+        cone_half_m: float | None = None,
+    ) -> None:
         self.params = params
         self.toe_m = toe_m
         self.heel_m = heel_m
-        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True)
+        self.cone_half_m = cone_half_m
+        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True, cone_half_m)
         #: Stance rows per foot (the same at every yaw).
         self.n_rows = int(c_rows.shape[0])
         #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
@@ -149,7 +167,7 @@ class StanceWrenchRows:
         if self._last is not None and self._last[0] == key:
             return self._last[1]
         yaw = np.asarray(foot_yaw_rad, dtype=float).ravel()
-        rows, lo, hi = _stance_rows(yaw, self.params, self.toe_m, self.heel_m)
+        rows, lo, hi = _stance_rows(yaw, self.params, self.toe_m, self.heel_m, self.cone_half_m)
         shape = (*foot_yaw_rad.shape, self.n_rows)
         out = (
             rows.reshape(*shape, 6),

@@ -148,7 +148,7 @@ class KDSubproblem:
         self.n = lay.n
         self._col_x, self._col_pc = lay.col_x, lay.col_pc
         self._col_f, self._col_tau, self._col_pf = lay.col_f, lay.col_tau, lay.col_pf
-        self._wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m)
+        self._wrench = StanceWrenchRows(c.contact, c.toe_m, c.heel_m, c.yaw_cone_half_m)
         self.n_wrench_rows = self._wrench.n_rows
         if not self._wrench.full_column_rank:  # pragma: no cover - contact model change
             raise ConfigError("contact", c.contact, "stance wrench rows of full column rank")

@@ -98,6 +98,10 @@ class KDConfig:
     contact: ContactParams = field(default_factory=ContactParams)
     toe_m: float = bounded(0.075, "[0, 0.3] m", "a length", _FOOT)
     heel_m: float = bounded(0.075, "[0, 0.3] m", "a length", _FOOT)
+    #: Half length [m] of the segment whose wrench cone bounds the yaw moment with
+    #: ``contact.yaw_moment = "cwc"`` (the whole foot; ``toe_m``, ``heel_m`` may be the
+    #: centre-of-pressure margin's); None: ``(toe_m + heel_m) / 2``.
+    yaw_cone_half_m: float | None = bounded(None, "[0, 0.3] m", "a length", _FOOT)
     foot_height_from_reference: bool = True
     #: Smallest lateral distance [m] between the feet in the stance foot's heading frame
     #: (:mod:`~gaitnet_mpc.mpc.implicit_kd`); None: no such row (the paper has none).
