@@ -10,10 +10,11 @@ starts) and of all solves.
 
 Every finished episode is one line of ``<out>/cases.jsonl``; a second run of the same
 command runs only the episodes missing there, so the job resumes after a stop, and the
-report ``<out>/paper_pipeline.md`` is rewritten from the file at the end::
+report ``<out>/paper_pipeline.md`` is rewritten from the file at the end (or alone, with
+``--report-only``)::
 
     .venv/bin/python benchmarks/paper_pipeline.py [--jobs 2] [--seeds 20] \
-        [--out benchmarks/results/paper_pipeline]
+        [--out benchmarks/results/paper_pipeline] [--report-only]
 """
 
 from __future__ import annotations
@@ -155,6 +156,9 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=RESULTS / "paper_pipeline")
+    parser.add_argument(
+        "--report-only", action="store_true", help="rewrite the report from the cases so far"
+    )
     args = parser.parse_args()
     if args.seeds < 1:
         parser.error(f"--seeds: {args.seeds} is not a positive number of layouts")
@@ -169,7 +173,7 @@ def main() -> None:
                 continue  # a line cut by a kill
             records[r["key"]] = r
     all_jobs = jobs(args.seeds)
-    todo = [j for j in all_jobs if key(j) not in records]
+    todo = [] if args.report_only else [j for j in all_jobs if key(j) not in records]
     print(f"{len(todo)} of {len(all_jobs)} episodes to run", flush=True)
     t0 = time.perf_counter()
 
