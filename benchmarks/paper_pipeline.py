@@ -106,7 +106,7 @@ def _median(rows: list[dict], field: str) -> str:
     return f"{np.median(vals):.1f}" if vals else "-"
 
 
-def report(all_jobs: list[Job], records: dict[str, dict], wall_s: float, n_jobs: int) -> str:
+def report(all_jobs: list[Job], records: dict[str, dict], wall_s: float | None, n_jobs: int) -> str:
     lines = [
         "# The paper's pipeline beside the defaults",
         "",
@@ -142,10 +142,24 @@ def report(all_jobs: list[Job], records: dict[str, dict], wall_s: float, n_jobs:
                     f"{_median(rows, 'full_ms_median')} / {_median(rows, 'full_ms_p99')} | "
                     f"{_median(rows, 'solve_ms_median')} / {_median(rows, 'solve_ms_p99')} |"
                 )
+    lines.append("")
+    for preset in PRESETS:
+        rows = [records[key(j)] for j in all_jobs if j[0] == preset and key(j) in records]
+        falls = [r["fall_time_s"] for r in rows if r["fell"] and r["fall_time_s"] is not None]
+        last = f", the latest fall at {max(falls):.2f} s" if falls else ""
+        lines.append(
+            f"- `{preset}`: {len(rows)} episodes, {sum(r['clean'] for r in rows)} clean, "
+            f"{len(falls)} fell{last}."
+        )
     lines += [
         "",
-        f"{len(records)} of {len(all_jobs)} episodes; this run: {wall_s / 60:.1f} min on "
-        f"{n_jobs} processes. Command: `{command_line()}`.",
+        f"{len(records)} of {len(all_jobs)} episodes; "
+        + (
+            "this report rewritten from `cases.jsonl`"
+            if wall_s is None
+            else f"this run: {wall_s / 60:.1f} min on {n_jobs} processes"
+        )
+        + f". Command: `{command_line()}`.",
         "",
     ]
     return "\n".join(lines)
@@ -186,7 +200,8 @@ def main() -> None:
     try:
         run_pool(run, todo, args.jobs, describe=describe)
     finally:
-        text = report(all_jobs, records, time.perf_counter() - t0, args.jobs)
+        wall_s = None if args.report_only else time.perf_counter() - t0
+        text = report(all_jobs, records, wall_s, args.jobs)
         write_report(args.out / "paper_pipeline.md", text, echo=False)
 
 
