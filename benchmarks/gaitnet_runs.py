@@ -117,7 +117,8 @@ def main() -> None:
     flats = [] if args.no_flat else [f"flat@{float(v):g}" for v in args.flat_speeds.split(",") if v]
     jobs: list[Job] = [(n, f, None) for n in names for f in flats]
     jobs += [(n, c, s) for n in names for c in courses for s in seeds]
-    use = "the seeds constants are chosen on" if args.seed_offset else "none used to choose"
+    tuning = args.seed_offset >= 100  # seeds 100 and up are the tuning seeds
+    use = "the seeds constants are chosen on" if tuning else "none used to choose"
     overrides = tuple(args.overrides)  # a bad one fails here, before any episode
     from gaitnet_mpc.scenario import make_scenario
 
@@ -136,7 +137,7 @@ def main() -> None:
         f"self-collision on. Flat: {FLAT_S:.0f} s; "
         f"gap and stepping-stones: {args.seeds} seeded layouts "
         f"({seeds[0] if seeds else '-'}-{seeds[-1] if seeds else '-'}"
-        f"{', tuning seeds' if args.seed_offset else ''}), "
+        f"{', tuning seeds' if tuning else ''}), "
         f"{SEEDED_S:.0f} s each, {use}. Gait-Net weights: "
         f"{args.weights or 'shipped'}. Settings: "
         f"{', '.join(overrides) if overrides else 'as shipped'}. "
@@ -174,7 +175,7 @@ def main() -> None:
         f"Command: `{command_line()}`.",
         "",
     ]
-    name = args.out or ("gaitnet_runs_tuning.md" if args.seed_offset else "gaitnet_runs.md")
+    name = args.out or ("gaitnet_runs_tuning.md" if tuning else "gaitnet_runs.md")
     write_report(name, "\n".join(lines))
 
 

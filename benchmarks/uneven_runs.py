@@ -84,7 +84,7 @@ def main() -> None:
         "",
         f"humanoid3d, {'settings ' + ', '.join(args.set) if args.set else 'default settings'}, "
         f"{knowledge}; seeds {seeds[0]}-{seeds[-1]}"
-        f"{' (tuning seeds)' if args.seed_offset else ''}, {DURATION_S:g} s each; tiles of "
+        f"{' (tuning seeds)' if args.seed_offset >= 100 else ''}, {DURATION_S:g} s each; tiles of "
         "0.25 x 0.5 m from x = 0.8 to 6.05 m (`uneven_course`).",
         "",
         "| no fall | clean | mean distance [m] | fell (seed: time) | not clean |",
