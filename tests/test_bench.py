@@ -81,3 +81,16 @@ def test_bench_refuses_an_unknown_baseline_revision(tmp_path: Path, capsys) -> N
     assert rc == 2
     assert "--baseline" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_realtime_cases_run_the_preset_itself() -> None:
+    """The default cases named ``--preset realtime`` get the preset file's settings (a copy
+    of them once missed its warm start)."""
+    from gaitnet_mpc.experiments.bench import DEFAULT_CASES, build_case
+
+    for case in DEFAULT_CASES:
+        _, ctrl = build_case(case, SPEC)
+        rti = "--preset realtime" in case.label
+        assert (ctrl.config.replan_j_max == 1) == rti
+        assert ctrl.config.warm_start_replans == rti
+
