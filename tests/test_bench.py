@@ -93,4 +93,3 @@ def test_the_realtime_cases_run_the_preset_itself() -> None:
         rti = "--preset realtime" in case.label
         assert (ctrl.config.replan_j_max == 1) == rti
         assert ctrl.config.warm_start_replans == rti
-

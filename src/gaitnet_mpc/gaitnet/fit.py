@@ -69,12 +69,17 @@ def feature_subset(kind: str) -> tuple[str, ...] | None:
     return names
 
 
-def select_features(data: GaitData, train: np.ndarray, kind: str) -> PCASelection | None:
-    """The PCA selection on the training rows (``kind == "pca"``), or None (all 16, or the
-    names ``kind`` lists: see :func:`feature_subset`)."""
-    if feature_subset(kind) is not None or kind == "full":
-        return None
-    return pca_select(data.x[train], FEATURE_NAMES)
+def feature_columns(x_train: np.ndarray, kind: str) -> tuple[list[int], PCASelection | None]:
+    """The input columns of the ``kind`` feature set (all 16, the names it lists, or the
+    PCA selection on the training rows ``x_train``) and that selection (None but for
+    ``"pca"``)."""
+    subset = feature_subset(kind)
+    if subset is not None:
+        return [FEATURE_NAMES.index(n) for n in subset], None
+    if kind == "full":
+        return list(range(len(FEATURE_NAMES))), None
+    selection = pca_select(x_train, FEATURE_NAMES)
+    return list(selection.indices), selection
 
 
 def fit(
@@ -93,14 +98,7 @@ def fit(
     cfg = config or TrainConfig()
     split = split_by_set(data.set_id, seed=split_seed)
     part = {name: np.isin(data.set_id, getattr(split, name)) for name in ("train", "val", "test")}
-    selection = select_features(data, part["train"], kind)
-    subset = feature_subset(kind)
-    if selection is not None:
-        cols = list(selection.indices)
-    elif subset is not None:
-        cols = [FEATURE_NAMES.index(n) for n in subset]
-    else:
-        cols = list(range(len(FEATURE_NAMES)))
+    cols, selection = feature_columns(data.x[part["train"]], kind)
     names = tuple(FEATURE_NAMES[i] for i in cols)
     x = data.x[:, cols]
     bar, update = _bar(cfg) if progress else (None, None)
