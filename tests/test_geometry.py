@@ -5,7 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from gaitnet_mpc.geometry import heading_axes, rot2, rotate2, skew, to_heading2, wrap_angle
+from gaitnet_mpc.geometry import (
+    heading_axes,
+    rot2,
+    rotate2,
+    skew,
+    to_heading2,
+    unwrap_angles,
+    wrap_angle,
+)
 
 
 def test_skew_is_the_cross_product() -> None:
@@ -34,6 +42,13 @@ def test_wrap_angle_maps_into_minus_pi_pi() -> None:
     np.testing.assert_allclose(np.cos(w), np.cos(a), atol=1e-12)
     np.testing.assert_allclose(np.sin(w), np.sin(a), atol=1e-12)
     assert float(wrap_angle(math.pi + 0.1)) == pytest.approx(-math.pi + 0.1)
+
+
+@pytest.mark.parametrize(
+    "angles", [[0.3], [0.1, 0.4, -0.2], [3.0, -3.0, 3.1], [-3.1, 3.1], [0.0, math.pi, 0.0]]
+)
+def test_unwrap_angles_is_numpys_unwrap(angles: list[float]) -> None:
+    np.testing.assert_array_equal(unwrap_angles(angles), np.unwrap(np.array(angles)))
 
 
 def test_rotate2_and_to_heading2_are_inverse_rotations() -> None:

@@ -439,3 +439,37 @@ def test_invalid_inputs_raise(humanoid: Setup) -> None:
         update_reference(s.robot, ref, None, None, np.ones(3))
     with pytest.raises(ConfigError):
         update_reference(load_robot("humanoid3d"), ref, None, None)
+
+
+@pytest.mark.parametrize("yaw_rate", [0.0, 0.8])
+def test_compiled_trunk_placement_is_the_python_loop(humanoid: Setup, yaw_rate: float) -> None:
+    """``ReferenceWorkspace.place_trunk`` (one compiled call) gives bitwise the
+    configurations, trunk positions and reachability of the Python fixed point, with and
+    without foot headings that differ from the trunk's (a turning walk), and with
+    unreachable targets."""
+    from dataclasses import replace
+
+    import gaitnet_mpc.kinematics.reference as reference
+
+    s = humanoid
+    ref, _, _ = _walk(s, 0.6, yaw_rate=yaw_rate)
+    rng = np.random.default_rng(3)
+    targets = ref.p_com_ref + rng.normal(scale=0.03, size=ref.p_com_ref.shape)
+    feet = ref.p_foot_ref.copy()
+    feet[-1, 0, 0] += 0.5  # out of the leg's reach
+    plan = reference.foot_plan(
+        ref.foothold_index, ref.swing_phase, ref.footholds_m, ref.foothold_yaw_rad,
+        ref.time_in_swing_s, s.ws.config.swing_apex_height_m, False,
+    )  # fmt: skip
+    for p_foot in (plan.p_foot_m, feet):
+        plan = replace(plan, p_foot_m=p_foot)
+        args = (s.ws, plan, targets, ref.p_base_ref, ref.yaw_ref_rad)
+        compiled = reference._place_trunk(*args)
+        legs, s.ws._leg_arrays = s.ws._leg_arrays, None  # the Python loop
+        try:
+            python = reference._place_trunk(*args)
+        finally:
+            s.ws._leg_arrays = legs
+        for a, b in zip(compiled, python, strict=True):
+            np.testing.assert_array_equal(a, b)
+    assert not python[3][-1] and python[3].any()  # the last boundary is out of reach

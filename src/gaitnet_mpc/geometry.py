@@ -7,6 +7,7 @@ counter-clockwise seen from above; angles in rad, lengths in m.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 
@@ -52,3 +53,11 @@ def wrap_angle(angle_rad: ArrayLike) -> np.ndarray:
     """Angle(s) wrapped to ``(-pi, pi]`` (``atan2(sin a, cos a)``, elementwise)."""
     a = np.asarray(angle_rad, dtype=float)
     return np.arctan2(np.sin(a), np.cos(a))
+
+
+def unwrap_angles(angles_rad: list[float]) -> np.ndarray:
+    """``np.unwrap`` of a short sequence of angles [rad], without its dozen array calls
+    where no two neighbours are half a turn apart or more (then nothing moves)."""
+    if all(abs(b - a) < math.pi for a, b in itertools.pairwise(angles_rad)):
+        return np.array(angles_rad, dtype=float)
+    return np.unwrap(np.array(angles_rad, dtype=float))

@@ -362,9 +362,9 @@ PARTS: dict[str, tuple[str, ...]] = {
     "QP input checks (KDSubproblem.inputs)": ("implicit_kd.py", "inputs"),
     "f_IK update_reference": ("reference.py", "update_reference"),
     "f_ref make_reference": ("reference.py", "make_reference"),
-    "  in f_IK + f_ref: trunk IK configurations (ReferenceWorkspace)": (
+    "  in f_IK + f_ref: trunk placement (ReferenceWorkspace.place_trunk, compiled)": (
         "reference_workspace.py",
-        "trunk_configurations",
+        "place_trunk",
     ),
     "dt policy (Gait-Net forward pass and features)": ("policy.py", "__call__"),
 }

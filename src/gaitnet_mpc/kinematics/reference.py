@@ -97,7 +97,7 @@ from gaitnet_mpc.command import Command
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.schedule import GaitHorizon
 from gaitnet_mpc.gait.timing import ReferenceTiming
-from gaitnet_mpc.geometry import wrap_angle
+from gaitnet_mpc.geometry import unwrap_angles, wrap_angle
 from gaitnet_mpc.kinematics.centroidal import centroidal_pose_eq30, centroidal_pose_riemann
 from gaitnet_mpc.kinematics.foot_plan import (
     FootPlan,
@@ -111,7 +111,6 @@ from gaitnet_mpc.kinematics.reference_workspace import (
     CentroidalReference,
     ReferenceConfig,
     ReferenceWorkspace,
-    rotations,
 )
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
@@ -142,10 +141,14 @@ def _place_trunk(
         q (h+1, nq), p_base (h+1, 3), rot (h+1, 3, 3), reachable (h+1,).
     """
     cfg = ws.config
-    rot = rotations(yaw_rad, cfg.trunk_pitch_rad)  # (h+1, 3, 3)
+    rot = ws.trunk_frames(yaw_rad)[0]  # (h+1, 3, 3)
     yaw_targets = None  # None: q0 = 0 (eq. 31), the same when the feet face the trunk heading
     if not ws.planar and np.max(np.abs(wrap_angle(plan.foot_yaw_rad - yaw_rad[:, None]))) > 1e-12:
         yaw_targets = plan.foot_yaw_rad
+    placed = ws.place_trunk(p_base_guess_m, yaw_rad, plan.p_foot_m, yaw_targets, p_com_target_m)
+    if placed is not None:
+        q, p_base, reachable = placed
+        return q, p_base, rot, reachable
     p_base = p_base_guess_m.copy()
     for it in range(cfg.com_iterations + 1):
         q, reachable = ws.trunk_configurations(p_base, yaw_rad, rot, plan.p_foot_m, yaw_targets)
@@ -400,12 +403,12 @@ def make_reference(
                 )
             yaws.append(yaw_td)
         fh_all[f] = np.array(pts)
-        fh_yaw[f] = np.unwrap(np.array(yaws))
+        fh_yaw[f] = unwrap_angles(yaws)
     plan = foot_plan(
         index, phase, fh_all, fh_yaw, time_in_swing, ws.config.swing_apex_height_m, ws.planar
     )
 
-    rot = rotations(yaw, ws.config.trunk_pitch_rad)
+    rot = ws.trunk_frames(yaw)[0]
     p_base0 = p_com_des - rot @ ws.com_offset_trunk_m  # nominal trunk-to-CoM offset
     pose0 = (
         np.zeros(3)

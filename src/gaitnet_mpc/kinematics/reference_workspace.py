@@ -24,6 +24,7 @@ from gaitnet_mpc.kinematics.leg_ik import (
 )
 from gaitnet_mpc.kinematics.leg_ik_kernel import leg_ik_rows
 from gaitnet_mpc.kinematics.rigid_body_kernel import KinematicTree, tree_of
+from gaitnet_mpc.kinematics.trunk_placement_kernel import place_trunk_rows
 from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
@@ -105,6 +106,8 @@ class ReferenceWorkspace:
         #: the model as arrays for the compiled CoM and momentum, None: Pinocchio's
         self.tree: KinematicTree | None = tree_of(self.model)
         self._nominal_joints = robot.nominal_joint_pos()
+        self._leg_arrays = self._stacked_legs()
+        self._frames: tuple[bytes, np.ndarray, np.ndarray] | None = None
 
         q_nom, _ = robot.mj_to_pin(robot.standing_qpos(), np.zeros(robot.nv))
         com_nom = np.array(pin.centerOfMass(self.model, self.data, q_nom, False))
@@ -135,6 +138,8 @@ class ReferenceWorkspace:
         on_ground = np.ones((1, _N_FEET), bool)
         on_ground.flags.writeable = False  # a ReferenceTiming's contact; numba types it apart
         foothold_means(np.zeros((1, _N_FEET, 3)), on_ground, rows, np.zeros((1, 3)))
+        feet = np.stack([p_feet[f] for f in FEET])[None]
+        self.place_trunk(p_base[None], np.zeros(1), feet, None, com_nom[None])
 
     def _measure_com_gains(
         self, p_base: np.ndarray, p_feet: dict[str, np.ndarray]
@@ -161,6 +166,23 @@ class ReferenceWorkspace:
         if not (sol.reachable.all() and np.all(gains[0] > 0.2) and np.all(gains[0] < 1.5)):
             raise RuntimeError(f"{self.robot.name}: implausible CoM gains {gains}")
         return gains[0], gains[1:]
+
+    def _stacked_legs(self) -> tuple[np.ndarray, ...] | None:
+        """:func:`place_trunk_rows`'s leg arguments: the nominal configuration, the legs'
+        entries of ``q`` and their geometries, stacked in :data:`FEET` order (None: the
+        planar biped)."""
+        if self.planar:
+            return None
+        nominal_q = np.concatenate([np.zeros(self.robot.n_root_q), self._nominal_joints])
+        legs = [self.geometries[f] for f in FEET]
+        assert all(isinstance(g, LegGeometry) for g in legs)
+        index = np.stack([self.robot.leg_joint_index[f] + self.robot.n_root_q for f in FEET])
+        fields = ("p_yaw_trunk_m", "p_roll_yaw_m", "p_pitch_roll_m", "thigh_m", "shank_m",
+                  "p_foot_ankle_m", "lower_rad", "upper_rad")  # fmt: skip
+        stacked = [
+            np.ascontiguousarray([getattr(g, name) for g in legs], dtype=float) for name in fields
+        ]
+        return (nominal_q, index.astype(np.int64), *stacked)
 
     def trunk_configurations(
         self,
@@ -207,6 +229,45 @@ class ReferenceWorkspace:
                 joints[:, self.robot.leg_joint_index[f]] = leg_q
                 reachable &= reach
         return configurations(self, p_base_m, yaw_rad, pitch, joints), reachable
+
+    def trunk_frames(self, yaw_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Trunk rotations (N, 3, 3) :func:`rotations` and quaternions (N, 4)
+        :func:`trunk_quaternions` at the headings ``yaw_rad`` (N,) and the configured
+        pitch; read-only, and the last result is kept (every ``f_IK`` of a sequential
+        solve with the same stage durations has the same headings)."""
+        key = yaw_rad.tobytes()
+        if self._frames is None or self._frames[0] != key:
+            pitch = self.config.trunk_pitch_rad
+            rot, quat = rotations(yaw_rad, pitch), trunk_quaternions(yaw_rad, pitch)
+            rot.flags.writeable = quat.flags.writeable = False
+            self._frames = (key, rot, quat)
+        return self._frames[1], self._frames[2]
+
+    def place_trunk(
+        self,
+        p_base_m: np.ndarray,
+        yaw_rad: np.ndarray,
+        p_foot_m: np.ndarray,
+        foot_yaw_rad: np.ndarray | None,
+        p_com_target_m: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The trunk placement of :func:`~gaitnet_mpc.kinematics.reference._place_trunk`
+        (``config.com_iterations`` corrections of the first guess ``p_base_m``) in one
+        compiled call: ``(q, p_base, reachable)``; None where it has no kernel (the planar
+        biped, a model without :attr:`tree`). Arguments as :meth:`trunk_configurations`."""
+        tree, legs = self.tree, self._leg_arrays
+        if self.planar or tree is None or legs is None:
+            return None
+        rot, quat = self.trunk_frames(yaw_rad)
+        n = p_base_m.shape[0]
+        has_yaw = foot_yaw_rad is not None
+        yaws = np.ascontiguousarray(foot_yaw_rad) if has_yaw else np.zeros((n, _N_FEET))
+        return place_trunk_rows(  # type: ignore[no-any-return]
+            np.ascontiguousarray(p_base_m), rot, quat, np.ascontiguousarray(p_foot_m), yaws,
+            has_yaw, np.ascontiguousarray(p_com_target_m), self.com_gain,
+            self.config.com_iterations, *legs, tree.parent, tree.kind, tree.idx_q, tree.rot,
+            tree.trans, tree.mass, tree.lever,
+        )  # fmt: skip
 
     def momentum(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(N, 6) centroidal momentum ``A_G(q) v`` (eq. 11) and (N, 3) CoM [m] of
@@ -333,8 +394,15 @@ def configurations(
     if ws.planar:
         q[:, 0], q[:, 1], q[:, 2] = p_base_m[:, 0], p_base_m[:, 2], pitch_rad
         return q
+    q[:, 0:3] = p_base_m
+    q[:, 3:7] = trunk_quaternions(yaw_rad, pitch_rad)
+    return q
+
+
+def trunk_quaternions(yaw_rad: np.ndarray, pitch_rad: float) -> np.ndarray:
+    """(N, 4) quaternions ``x y z w`` of ``R_z(yaw) R_y(pitch)`` (:func:`configurations`)."""
     cz, sz = np.cos(0.5 * yaw_rad), np.sin(0.5 * yaw_rad)
     ct, st = math.cos(0.5 * pitch_rad), math.sin(0.5 * pitch_rad)
-    q[:, 0:3] = p_base_m
-    q[:, 3], q[:, 4], q[:, 5], q[:, 6] = -sz * st, cz * st, sz * ct, cz * ct
-    return q
+    quat = np.empty((yaw_rad.shape[0], 4))
+    quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3] = -sz * st, cz * st, sz * ct, cz * ct
+    return quat

@@ -73,22 +73,24 @@ def foot_wrench_constraints(
     """
     if not in_stance:
         return np.eye(6), np.zeros(6), np.zeros(6)
-    rows, lo, hi = _stance_rows(
-        np.array([yaw_rad], dtype=float), params, toe_m, heel_m, cone_half_m
-    )
+    yaw = np.array([yaw_rad], dtype=float)
+    c_yaw, s_yaw = np.cos(yaw), np.sin(yaw)
+    rows, lo, hi = _stance_rows(c_yaw, s_yaw, params, toe_m, heel_m, cone_half_m)
     return rows[0], lo, hi
 
 
 def _stance_rows(
-    yaw_rad: np.ndarray,
+    c_yaw: np.ndarray,
+    s_yaw: np.ndarray,
     params: ContactParams,
     toe_m: float,
     heel_m: float,
     cone_half_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stance rows ``C`` (n, m, 6) at the yaws ``yaw_rad`` (n,), bounds ``l, u`` (m,)."""
-    n = yaw_rad.size
-    c_yaw, s_yaw = np.cos(yaw_rad), np.sin(yaw_rad)
+    """Stance rows ``C`` (n, m, 6) at the yaws of cosines ``c_yaw`` and sines ``s_yaw``
+    (n,), bounds ``l, u`` (m,). Each entry of ``C`` is a constant, or a constant times the
+    cosine or the sine: :class:`StanceWrenchRows` builds it from three evaluations."""
+    n = c_yaw.size
     zero = np.zeros(n)
     axis = np.stack([c_yaw, s_yaw, zero], axis=1)  # (n, 3) foot long axis (toe direction)
     lateral = np.stack([-s_yaw, c_yaw, zero], axis=1)
@@ -152,7 +154,11 @@ class StanceWrenchRows:
         self.toe_m = toe_m
         self.heel_m = heel_m
         self.cone_half_m = cone_half_m
-        c_rows, _, _ = foot_wrench_constraints(0.0, params, toe_m, heel_m, True, cone_half_m)
+        # C(yaw) = C_0 + cos(yaw) C_c + sin(yaw) C_s (see _stance_rows)
+        unit = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
+        rows, self._lo, self._hi = _stance_rows(*unit, params, toe_m, heel_m, cone_half_m)
+        self._c0, self._cc, self._cs = rows[0], rows[1] - rows[0], rows[2] - rows[0]
+        c_rows = self._c0 + self._cc
         #: Stance rows per foot (the same at every yaw).
         self.n_rows = int(c_rows.shape[0])
         #: Whether the stance rows have full column rank (then ``C w = 0`` forces ``w = 0``).
@@ -166,13 +172,13 @@ class StanceWrenchRows:
         key = foot_yaw_rad.tobytes()
         if self._last is not None and self._last[0] == key:
             return self._last[1]
-        yaw = np.asarray(foot_yaw_rad, dtype=float).ravel()
-        rows, lo, hi = _stance_rows(yaw, self.params, self.toe_m, self.heel_m, self.cone_half_m)
+        yaw = np.asarray(foot_yaw_rad, dtype=float)[..., None, None]
+        rows = self._c0 + np.cos(yaw) * self._cc + np.sin(yaw) * self._cs
         shape = (*foot_yaw_rad.shape, self.n_rows)
         out = (
-            rows.reshape(*shape, 6),
-            np.broadcast_to(lo, shape).copy(),
-            np.broadcast_to(hi, shape).copy(),
+            rows,
+            np.broadcast_to(self._lo, shape).copy(),
+            np.broadcast_to(self._hi, shape).copy(),
         )
         for arr in out:
             arr.flags.writeable = False
