@@ -60,3 +60,33 @@ def test_a_struck_box_of_unknown_height_is_stepped_over(tmp_path: Path) -> None:
 def test_toe_strike_raise_is_checked() -> None:
     with pytest.raises(ConfigError, match="toe_strike_raise_m"):
         KDWalkConfig(toe_strike_raise_m=-0.01)
+
+
+def test_shank_event_without_an_obstacle_below_is_json(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A shank check over two obstacles, the shank passing over only one: the other's
+    clearance (infinite) is recorded as None, so ``summary.json`` can be written (it
+    raised "Out of range float values are not JSON compliant" at the end of the run)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    import gaitnet_mpc.control.swing_obstacles as so
+    from gaitnet_mpc.robots import load_robot
+
+    robot = load_robot("humanoid3d")
+    checker = so.SwingObstacles(robot, None, KDWalkConfig())  # type: ignore[arg-type]
+    monkeypatch.setattr(so, "swing_shank_clearance_m", lambda *a: np.array([np.inf, 0.001]))
+    times = np.linspace(0.0, 0.5, 11)
+    zeros = np.zeros((11, 3))
+    ref = SimpleNamespace(times_s=times, p_base_ref=zeros, rot_base_ref=np.zeros((11, 3, 3)))
+    checker.check_shank(
+        SimpleNamespace(t_s=1.0),  # type: ignore[arg-type]
+        SimpleNamespace(swing_foot="left", step_index=3, time_in_step_s=0.1),  # type: ignore[arg-type]
+        SimpleNamespace(obstacles=[(0.0,) * 5, (1.0,) * 5], duration_s=0.25,
+                        position=lambda t: np.zeros((len(t), 3))),  # type: ignore[arg-type]
+        SimpleNamespace(reference=ref, t_plan_s=1.0),  # type: ignore[arg-type]
+        SimpleNamespace(heading_rad=lambda t: 0.0),  # type: ignore[arg-type]
+    )  # fmt: skip
+    (event,) = checker.events
+    assert event["kind"] == "shank" and event["clearance_m"] == [None, 0.001]
+    json.dumps(checker.events, allow_nan=False)

@@ -39,7 +39,8 @@ class SwingObstacles:
     Attributes:
         events: ``summary.json``'s ``swing_events``: kind ``toe_strike`` (time, foot, foot
             position, the struck obstacles' tops after the strike) or ``shank`` (time,
-            foot, the least shank clearance over each obstacle of the swing, their tops).
+            foot, the least shank clearance over each obstacle of the swing, None where the
+            shank never passes over it, and their tops).
     """
 
     def __init__(self, robot: RobotModel, terrain: TerrainView, config: KDWalkConfig) -> None:
@@ -198,6 +199,6 @@ class SwingObstacles:
             self._shank_recorded_step = schedule.step_index
             self.events.append({
                 "kind": "shank", "t_s": round(state.t_s, 4), "foot": foot,
-                "clearance_m": [round(float(c), 4) for c in clear],
+                "clearance_m": [round(float(c), 4) if np.isfinite(c) else None for c in clear],
                 "obstacle_tops_m": [round(float(o[2]), 4) for o in swing.obstacles],
             })  # fmt: skip
