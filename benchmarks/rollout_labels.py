@@ -49,7 +49,9 @@ def draw(seed: int) -> dict[str, Any]:
     }
 
 
-def run_episode(item: tuple[dict[str, Any], float, float, str | None]) -> dict[str, Any]:
+def run_episode(
+    item: tuple[dict[str, Any], float, float, str | None, tuple[str, ...]],
+) -> dict[str, Any]:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from gaitnet_mpc.control.dt_policies import make_dt_policy
     from gaitnet_mpc.experiments.dt_rollouts import RolloutDt, drive
@@ -58,7 +60,7 @@ def run_episode(item: tuple[dict[str, Any], float, float, str | None]) -> dict[s
     from gaitnet_mpc.scenario import build_episode, make_scenario
     from gaitnet_mpc.sim.disturbances import Push
 
-    d, window_s, horizon_s, weights = item
+    d, window_s, horizon_s, weights, overrides = item
     t0 = time.perf_counter()
     a = math.radians(d["angle_deg"])
     f = d["force_n"]
@@ -70,6 +72,7 @@ def run_episode(item: tuple[dict[str, Any], float, float, str | None]) -> dict[s
         duration_s=duration,
         pushes=(push,),
         gaitnet_weights=weights,
+        overrides=list(overrides),
     )
     robot = load_robot("humanoid3d")
     inner = make_dt_policy(scenario.config.dt_policy, robot, scenario.config.sequential)
@@ -111,6 +114,8 @@ def main() -> None:
     ap.add_argument(
         "--no-oracle", action="store_true", help="only the student: its falls, no labels"
     )
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a setting of the student (as gaitnet-mpc run --set)")  # fmt: skip
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
     if args.first_seed < 100:
@@ -119,8 +124,9 @@ def main() -> None:
     done = set()
     if args.out.exists():
         done = {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line}
+    sets = tuple(args.set)
     todo = [
-        (draw(s), 0.0 if args.no_oracle else args.window, args.horizon, args.weights)
+        (draw(s), 0.0 if args.no_oracle else args.window, args.horizon, args.weights, sets)
         for s in range(args.first_seed, args.first_seed + args.episodes)
         if s not in done
     ]

@@ -315,3 +315,67 @@ def test_oracle_keeps_the_converged_plan_of_lowest_cost(biped):
     np.testing.assert_allclose(
         summary["step_durations_s"], [5 * d["dts_s"][0] for d in steps], atol=1e-3
     )
+
+
+def _state_from(rot, com, vel, omega, feet):
+    from gaitnet_mpc.state import RobotState
+
+    z = np.zeros(3)
+    return RobotState(
+        t_s=0.0, qpos=np.zeros(7), qvel=np.zeros(6), base_pos_world_m=com,
+        base_rot_world=rot, base_lin_vel_world_mps=z, base_ang_vel_world_radps=omega,
+        joint_pos_rad=np.zeros(0), joint_vel_radps=np.zeros(0), com_world_m=com,
+        com_vel_world_mps=vel, h_measured=np.zeros(6), foot_pos_world_m=feet,
+        foot_yaw_rad={"left": 0.0, "right": 0.0}, foot_contact={"left": True, "right": False},
+        foot_wrench_world={"left": np.zeros(6), "right": np.zeros(6)},
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("heading", [0.0, 0.7])
+def test_mirror_features_are_those_of_the_mirrored_step_start(heading: float) -> None:
+    """The features of a step start reflected through the heading's x-z plane (legs
+    swapped; the trunk's frame is the reflected one with its y axis turned back, ``F R S``)
+    are ``mirror_features`` of its features; mirroring twice is the identity."""
+    from scipy.spatial.transform import Rotation
+
+    from gaitnet_mpc.dataset.step_features import mirror_features, step_features
+
+    rng = np.random.default_rng(7)
+    c, s = np.cos(heading), np.sin(heading)
+    yaw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # world <- heading
+    flip = yaw @ np.diag([1.0, -1.0, 1.0]) @ yaw.T  # the reflection y -> -y of the heading
+    rot = Rotation.from_euler("ZYX", [heading + 0.2, 0.1, -0.15]).as_matrix()
+    com = rng.normal(size=3) + np.array([0.0, 0.0, 0.55])
+    vel, omega = rng.normal(size=3), rng.normal(size=3)
+    feet = {"left": rng.normal(size=3), "right": rng.normal(size=3)}
+    touchdown = rng.normal(size=3)
+    x = step_features(_state_from(rot, com, vel, omega, feet), "left", "right", touchdown, heading)
+    mirrored = _state_from(
+        flip @ rot @ np.diag([1.0, -1.0, 1.0]), flip @ com, flip @ vel, -flip @ omega,
+        {"left": flip @ feet["right"], "right": flip @ feet["left"]},
+    )  # fmt: skip
+    x_m = step_features(mirrored, "right", "left", flip @ touchdown, heading)
+    np.testing.assert_allclose(mirror_features(x), x_m, atol=1e-12)
+    np.testing.assert_array_equal(mirror_features(mirror_features(x)), x)
+
+
+def test_mirror_symmetric_prediction_is_the_members_mean_of_both():
+    """``predict(x, x_mirror)``: each member averages its two answers, so the two orders
+    give the same dt and spread."""
+    rng = np.random.default_rng(1)
+    f, hidden, k = len(FEATURE_NAMES), 8, 3
+    net = GaitNet(
+        GaitNetWeights(
+            weights=(rng.normal(size=(k, hidden, f)), 0.01 * rng.normal(size=(k, 1, hidden))),
+            biases=(rng.normal(size=(k, hidden)), np.zeros((k, 1))),
+            feature_names=FEATURE_NAMES, x_mean=np.zeros(f), x_std=np.ones(f), y_mean=0.05,
+            y_std=0.01, dt_clip_s=(0.03, 0.08), activation="tanh",
+            data_manifest_sha256="0" * 64, robot="humanoid3d", teacher="kd",
+        )
+    )  # fmt: skip
+    x, x_m = rng.normal(size=len(FEATURE_NAMES)), rng.normal(size=len(FEATURE_NAMES))
+    members = 0.5 * (net.members_dt(x) + net.members_dt(x_m))
+    dt, spread = net.predict(x, x_m)
+    assert dt == pytest.approx(np.clip(members.mean(), *net.dt_clip_s))
+    assert spread == pytest.approx(members.std())
+    assert net.predict(x_m, x) == pytest.approx((dt, spread))

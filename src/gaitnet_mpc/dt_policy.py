@@ -103,6 +103,9 @@ class GaitNetPolicyConfig:
         max_retimes: dt changes per step start before the dt is frozen; None: no limit
             (Algorithm 1 as printed). 2 on tuning gaps: 10/10 without a fall, against
             6/10 without a limit and 9/10 with 1 (gaitnet_runs_tuning.md).
+        mirror_symmetric: each member's dt is the mean of its dts of the step start and
+            of its left-right mirror image, so that mirror-image step starts get the same
+            dt (docs/design/gaitnet_symmetry.md).
     """
 
     max_spread_s: float = bounded(0.006, "(0, 0.2] s", "a spread", "0.2 s spans every dt")
@@ -112,6 +115,7 @@ class GaitNetPolicyConfig:
     max_damped: int = bounded(3, "[0, 100]", "an integer", "100 is twice Table X's j_max")
     safeguards: bool = True
     max_retimes: int | None = bounded(2, "[1, 100]", "an integer", "None: no limit")
+    mirror_symmetric: bool = False
 
     def __post_init__(self) -> None:
         check_ranges(self)

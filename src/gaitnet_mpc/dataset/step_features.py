@@ -3,6 +3,10 @@
 One function serves both sides: data collection (with the touchdown the teacher made) and
 the controller (with the touchdown of the current plan), so the network sees at run time
 exactly what it was trained on.
+
+:func:`mirror_features` gives the features of the left-right mirror image of a step start
+(the reflection ``y -> -y`` of the heading frame, left and right leg swapped): the robot
+is symmetric, so a dt policy should give a step start and its mirror image the same dt.
 """
 
 from __future__ import annotations
@@ -55,3 +59,17 @@ def step_features(
             feet[1][1],
         ]
     )
+
+
+#: Features whose sign the mirror ``y -> -y`` flips: y positions and velocities, roll, yaw,
+#: and the angular velocities about x and z (an axial vector's x and z components flip
+#: under a reflection of y).
+_MIRROR_SIGN = np.array([1, -1, 1, 1, -1, 1, -1, 1, -1, -1, 1, -1, 1, -1, 1, -1], dtype=float)
+#: The mirror swaps the legs: left foot (x, y) <-> right foot (x, y).
+_MIRROR_ORDER = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 14, 15, 12, 13])
+
+
+def mirror_features(x: np.ndarray) -> np.ndarray:
+    """(..., 16) the features of the mirror image of the step starts ``x`` (..., 16), in
+    ``FEATURE_NAMES`` order (module docstring)."""
+    return np.asarray(x, dtype=float)[..., _MIRROR_ORDER] * _MIRROR_SIGN

@@ -226,11 +226,16 @@ class GaitNet:
             z = buf
         return z
 
-    def predict(self, x: np.ndarray) -> tuple[float, float]:
+    def predict(self, x: np.ndarray, x_mirror: np.ndarray | None = None) -> tuple[float, float]:
         """(dt [s] clipped into ``dt_clip_s``, spread [s]: the members' standard deviation)
-        for one feature vector (f,) in ``feature_names`` order. Not thread-safe (it reuses
+        for one feature vector (f,) in ``feature_names`` order. With ``x_mirror``, the
+        features of the step start's mirror image, each member answers the mean of its dts
+        of the two (a policy symmetric by construction). Not thread-safe (it reuses
         buffers); give each thread its own :class:`GaitNet`."""
         dts = self._one(np.asarray(x, dtype=float)).tolist()
+        if x_mirror is not None:
+            mirrored = self._one(np.asarray(x_mirror, dtype=float)).tolist()
+            dts = [0.5 * (a + b) for a, b in zip(dts, mirrored, strict=True)]
         mean = sum(dts) / self._k
         spread = math.sqrt(sum((d - mean) ** 2 for d in dts) / self._k)
         lo, hi = self.dt_clip_s

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from gaitnet_mpc.dataset.step_features import step_features
+from gaitnet_mpc.dataset.step_features import mirror_features, step_features
 from gaitnet_mpc.dt_policy import (
     NOMINAL_DT_S,
     GaitNetPolicyConfig,
@@ -135,7 +135,10 @@ class GaitNetDt:
             s.state, s.stance_foot, s.swing_foot, touchdown[s.swing_foot][0], problem.heading_rad
         )
         d.features = x
-        dt, spread = self.net.predict(x[self._columns])
+        if self.config.mirror_symmetric:
+            dt, spread = self.net.predict(x[self._columns], mirror_features(x)[self._columns])
+        else:
+            dt, spread = self.net.predict(x[self._columns])
         d.spreads_s.append(spread)
         bounds = self.bounds_s
         if not self.config.safeguards:
