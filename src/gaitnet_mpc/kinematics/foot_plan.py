@@ -160,11 +160,11 @@ def stacked_index(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Footholds of both feet stacked (n_l + n_r, 3), and per boundary the stacked row of
     ``F_j`` and of ``F_{j+1}`` (clipped to the foot's last foothold), each (h+1, 2)."""
-    sizes = np.array([footholds[f].shape[0] for f in FEET])
-    offset = np.concatenate([[0], np.cumsum(sizes)[:-1]])  # (2,)
-    stacked = np.concatenate([footholds[f] for f in FEET])
-    j0 = index + offset
-    j1 = np.minimum(j0 + 1, offset + sizes - 1)
+    first, second = (footholds[f] for f in FEET)
+    n0, n1 = first.shape[0], second.shape[0]
+    stacked = np.concatenate((first, second))
+    j0 = index + np.array([0, n0])  # each foot's rows start at its offset
+    j1 = np.minimum(j0 + 1, np.array([n0 - 1, n0 + n1 - 1]))
     return stacked, j0, j1
 
 
