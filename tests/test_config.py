@@ -69,13 +69,15 @@ def _default_walk_config(planar: bool) -> KDWalkConfig:
 
 @pytest.mark.parametrize("planar", [False, True])
 def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> None:
-    assert preset_names("kd") == ["blind", "default", "paper", "realtime"]
+    assert preset_names("kd") == ["blind", "default", "fastdt", "paper", "realtime"]
     assert preset_names("srbm") == ["default"]
     default = _default_walk_config(planar)
     assert load_preset(KDWalkConfig, "kd", "default", planar) == default
     realtime = load_preset(KDWalkConfig, "kd", "realtime", planar)
     assert realtime == replace(default, replan_j_max=1, warm_start_replans=True)
     assert load_preset(KDWalkConfig, "kd", "blind", planar) == replace(default, blind=True)
+    fast = replace(default.dt_policy, bounds_s=(0.035, 0.07))
+    assert load_preset(KDWalkConfig, "kd", "fastdt", planar) == replace(default, dt_policy=fast)
     assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config_before(planar)
     assert load_preset(SRBMWalkConfig, "srbm", "default", planar) == SRBMWalkConfig()
 
