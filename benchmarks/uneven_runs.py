@@ -99,7 +99,8 @@ def main() -> None:
         "",
     ]
     blind = "_blind" if args.blind else ""
-    default = f"uneven_{args.amplitude * 100:g}cm_{args.speed:g}mps{blind}.md"
+    tuning = "_tuning" if args.seed_offset >= 100 else ""  # never over a reported file
+    default = f"uneven_{args.amplitude * 100:g}cm_{args.speed:g}mps{blind}{tuning}.md"
     write_report(args.out or default, "\n".join(lines))
 
 
