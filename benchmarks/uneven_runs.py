@@ -62,6 +62,7 @@ def main() -> None:
     parser.add_argument("--out", default=None, help="report name in benchmarks/results/")
     args = parser.parse_args()
     seeds = list(range(args.seed_offset, args.seed_offset + args.seeds))
+    tuning = args.seed_offset >= 100  # seeds 100 and up are the tuning seeds
     worker = partial(
         run,
         amplitude_m=args.amplitude,
@@ -84,7 +85,7 @@ def main() -> None:
         "",
         f"humanoid3d, {'settings ' + ', '.join(args.set) if args.set else 'default settings'}, "
         f"{knowledge}; seeds {seeds[0]}-{seeds[-1]}"
-        f"{' (tuning seeds)' if args.seed_offset >= 100 else ''}, {DURATION_S:g} s each; tiles of "
+        f"{' (tuning seeds)' if tuning else ''}, {DURATION_S:g} s each; tiles of "
         "0.25 x 0.5 m from x = 0.8 to 6.05 m (`uneven_course`).",
         "",
         "| no fall | clean | mean distance [m] | fell (seed: time) | not clean |",
@@ -99,8 +100,8 @@ def main() -> None:
         "",
     ]
     blind = "_blind" if args.blind else ""
-    tuning = "_tuning" if args.seed_offset >= 100 else ""  # never over a reported file
-    default = f"uneven_{args.amplitude * 100:g}cm_{args.speed:g}mps{blind}{tuning}.md"
+    suffix = "_tuning" if tuning else ""  # never over a reported file
+    default = f"uneven_{args.amplitude * 100:g}cm_{args.speed:g}mps{blind}{suffix}.md"
     write_report(args.out or default, "\n".join(lines))
 
 

@@ -17,7 +17,7 @@ its minimum over the rounds. Per case it reports:
 * the physical outcome (fell, distance), so that a faster case is not a worse walker.
 
 :func:`profile_parts` runs one more episode under :mod:`cProfile` and splits the solve time
-into the condensed QP, the reference updates (f_IK, f_ref) and the trunk IK.
+into the condensed QP, the reference updates (f_IK, f_ref) and their trunk placement.
 :func:`memory_episode` reads the resident set size at the start and end of one long
 episode. :func:`perf_markdown` writes it all as ``perf.md``.
 """

@@ -256,7 +256,7 @@ class ReferenceWorkspace:
         compiled call: ``(q, p_base, reachable)``; None where it has no kernel (the planar
         biped, a model without :attr:`tree`). Arguments as :meth:`trunk_configurations`."""
         tree, legs = self.tree, self._leg_arrays
-        if self.planar or tree is None or legs is None:
+        if tree is None or legs is None:  # legs: None on the planar biped
             return None
         rot, quat = self.trunk_frames(yaw_rad)
         n = p_base_m.shape[0]
