@@ -226,9 +226,10 @@ def test_kd_config_toml_holds_preset_and_overrides(tmp_path: Path) -> None:
     argv += ["--duration", "0.05", "--no-video", "--no-plots", "--no-progress"]
     assert main([*argv, "--out", str(out)]) == 0
     config = tomllib.loads((out / "config.toml").read_text())
-    assert config["replan_j_max"] == 7 and config["keep_feet_apart"] is False
+    assert config["replan_j_max"] == 7 and config["keep_feet_apart"] is True
     kd = config["sequential"]["kd"]
     assert kd["w_force"] == 2e-4 and kd["w_pose"] == [200.0, 200.0, 200.0, 300.0, 300.0, 300.0]
+    assert kd["weight_units"] == "motion"
     assert kd["qp_options"] == {} and config["preview"] == "none"
 
 

@@ -10,10 +10,9 @@ import pytest
 
 from gaitnet_mpc.config import apply, dumps, load_preset, parse_overrides, preset_names
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
-from gaitnet_mpc.control.lowlevel import LowLevelConfig
 from gaitnet_mpc.control.registry import controller_config
 from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig
-from gaitnet_mpc.dt_policy import DtPolicyConfig, GaitNetPolicyConfig
+from gaitnet_mpc.dt_policy import DtPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.preview import PreviewConfig
 from gaitnet_mpc.mpc.contact import ContactParams
@@ -21,13 +20,14 @@ from gaitnet_mpc.mpc.implicit_kd import KDConfig
 from gaitnet_mpc.mpc.sequential import SequentialConfig
 
 
-def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
-    """``kd_walk.paper_walk_config`` as it was before the presets became TOML files, with
-    the CoP over the whole foot (``cop_fraction`` 1, added to the preset when the default
-    became 0.6) and Gait-Net's safeguards off (Algorithm 1 as printed; the registry did
-    this for ``gaitnet --preset paper`` until the dt policy became part of the settings)."""
+def _paper_walk_config(planar: bool) -> KDWalkConfig:
+    """``kd --preset paper`` written out: Table VIII (planar: Table V) read per unit of
+    motion, Table X, no disturbance observer and (humanoid) the net taught by this preset's
+    ``kd``, over the default preset (its robot-level rows and low level, issue 49)."""
+    default = _default_walk_config(planar)
     if planar:
         kd = KDConfig(
+            weight_units="motion",
             w_momentum=(20.0,) * 6,
             w_pose=(200.0, 200.0, 200.0, 300.0, 300.0, 300.0),
             w_p_foot=(0.01, 0.01, 0.01),
@@ -35,14 +35,12 @@ def _paper_walk_config_before(planar: bool) -> KDWalkConfig:
             contact=ContactParams(fz_max_n=250.0),
         )
     else:
-        kd = KDConfig()  # Table VIII
-    return KDWalkConfig(
+        kd = KDConfig(weight_units="motion")  # Table VIII
+    net = None if planar else "humanoid3d-kd-paper"  # taught by this preset's kd
+    return replace(
+        default,
         sequential=SequentialConfig(kd=kd),
-        low_level=LowLevelConfig(),
-        keep_feet_apart=False,
-        lateral_return_time_s=None,
-        cop_fraction=1.0,
-        dt_policy=DtPolicyConfig(gaitnet=GaitNetPolicyConfig(safeguards=False)),
+        dt_policy=DtPolicyConfig(gaitnet_weights=net),
         disturbance_observer=None,
     )
 
@@ -78,7 +76,7 @@ def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> 
     assert load_preset(KDWalkConfig, "kd", "blind", planar) == replace(default, blind=True)
     fast = replace(default.dt_policy, bounds_s=(0.035, 0.07))
     assert load_preset(KDWalkConfig, "kd", "fastdt", planar) == replace(default, dt_policy=fast)
-    assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config_before(planar)
+    assert load_preset(KDWalkConfig, "kd", "paper", planar) == _paper_walk_config(planar)
     assert load_preset(SRBMWalkConfig, "srbm", "default", planar) == SRBMWalkConfig()
 
 
@@ -86,7 +84,7 @@ def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> 
 def test_registry_configs_equal_todays(planar: bool) -> None:
     assert controller_config("kd", planar) == _default_walk_config(planar)
     assert controller_config("kd", planar, preset="paper", preview=True) == preview_walk_config(
-        _paper_walk_config_before(planar)
+        _paper_walk_config(planar)
     )
     assert controller_config("srbm", planar, dt_s=0.05) == SRBMWalkConfig(dt_s=0.05)
     assert controller_config("stand", planar) is None
@@ -96,7 +94,7 @@ def test_registry_configs_equal_todays(planar: bool) -> None:
     "config",
     [
         KDWalkConfig(),
-        _paper_walk_config_before(True),
+        _paper_walk_config(True),
         preview_walk_config(),
         replace(KDWalkConfig(), lip_anchor_max_m=0.02, preview=PreviewConfig(n_steps=4)),
         SRBMWalkConfig(com_height_m=0.6),
@@ -107,7 +105,7 @@ def test_a_whole_config_round_trips_through_toml(config: object) -> None:
     assert text.startswith("# a header\n# over two lines\n")
     assert apply(type(config)(), tomllib.loads(text)) == config
     # also over another starting point (a run's config.toml is complete)
-    start = _paper_walk_config_before(False) if isinstance(config, KDWalkConfig) else None
+    start = _paper_walk_config(False) if isinstance(config, KDWalkConfig) else None
     if start is not None:
         assert apply(start, tomllib.loads(text)) == config
 

@@ -373,6 +373,31 @@ def test_bad_iterate_and_bounds_raise_config_error(sub: KDSubproblem) -> None:
         KDConfig(w_p_com=(1.0, 2.0))
 
 
+def test_motion_weight_units_read_pose_and_momentum_per_unit_mass_and_inertia() -> None:
+    """``weight_units = "motion"`` weighs ``[H; h]`` as the quantity weights divided by
+    ``m^2`` (linear rows) and ``I^2`` (angular rows): the converged plan equals that of
+    the same weights written out; and the option and the inertia are checked."""
+    inertia = (0.64, 0.58, 0.094)
+    w = (200.0, 150.0, 100.0, 200.0, 300.0, 400.0)
+    scale = np.array([MASS] * 3 + list(inertia)) ** 2
+    motion = KDConfig(mass_kg=MASS, inertia_kgm2=inertia, weight_units="motion", w_pose=w)
+    written = KDConfig(mass_kg=MASS, w_pose=tuple(np.array(w) / scale),
+                       w_momentum=tuple(np.array(motion.w_momentum) / scale))  # fmt: skip
+    np.testing.assert_allclose(motion.pose_weights, written.pose_weights, rtol=1e-12)
+    np.testing.assert_allclose(motion.stage_weights()[0], written.stage_weights()[0], rtol=1e-12)
+    args, pc0 = walking_problem()
+    a, _, _ = converge(KDSubproblem(motion), args, pc0)
+    b, _, _ = converge(KDSubproblem(written), args, pc0)
+    np.testing.assert_allclose(a.p_foot, b.p_foot, atol=1e-6)
+    np.testing.assert_allclose(a.f, b.f, atol=1e-3)
+    quantity = converge(KDSubproblem(KDConfig(mass_kg=MASS, w_pose=w)), args, pc0)[0]
+    assert np.abs(quantity.p_com - a.p_com).max() > 1e-4  # the reading changes the plan
+    with pytest.raises(ConfigError, match="weight_units"):
+        KDConfig(weight_units="si")
+    with pytest.raises(ConfigError, match="inertia_kgm2"):
+        KDConfig(inertia_kgm2=(0.6, 0.0, 0.1))
+
+
 def test_foot_separation_row_keeps_the_touchdown_beside_the_stance_foot() -> None:
     """With ``min_foot_separation_m``, a right foot whose (heavily weighted) reference lies
     left of the left stance foot lands ``d_min`` to its right in the heading frame, at a 0.3

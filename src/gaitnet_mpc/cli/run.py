@@ -170,8 +170,9 @@ def add_parser(sub: Any) -> None:
     run.add_argument(
         "--preset",
         help="settings preset (gaitnet_mpc/presets/): kd family 'default' (tuned, see README "
-        "'Deviations from the paper'), 'paper' (Table VIII / Table V weights and limits, "
-        "one-step preview, none of the additions) or 'realtime'; srbm, wbmpc 'default'",
+        "'Deviations from the paper'), 'paper' (the numbers of Tables VIII / V and X, the "
+        "weights read per unit of motion, docs/design/paper_weights.md), 'realtime', "
+        "'fastdt' or 'blind'; srbm, wbmpc 'default'",
     )
     run.add_argument(
         "--config",

@@ -8,10 +8,9 @@ NLP with dt as a variable for ``kd-optdt``) sets the step's MPC sampling time an
 sequential solve runs (Algorithm 1, up to ``j_max`` QPs); during the step the same dt is
 kept and the MPC replans every ``replan_period_s`` (at least once per stage, Remark 4).
 The footholds the MPC chooses are the swing targets of the low-level controller; the next
-touchdown is bounded by the one-step terrain preview (eq. 24). With
-``KDWalkConfig.preview`` set, the patch of that touchdown and the CoM path along the
-course come instead from a multi-step LIP footstep plan, re-made at every solve
-(:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
+touchdown is bounded by the one-step terrain preview (eq. 24). With ``KDWalkConfig.preview``
+set, a multi-step LIP footstep plan re-made at every solve gives instead the patch of that
+touchdown and the CoM path (:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 """
 
 from __future__ import annotations
@@ -92,6 +91,7 @@ class KDWalkController(WalkingBase):
         kd = replace(
             self.config.sequential.kd,
             mass_kg=robot.total_mass_kg,
+            inertia_kgm2=robot.standing_inertia_kgm2,
             toe_m=self.config.cop_fraction * robot.spec.foot_toe_m,
             heel_m=self.config.cop_fraction * robot.spec.foot_heel_m,
             yaw_cone_half_m=0.5 * (robot.spec.foot_toe_m + robot.spec.foot_heel_m),

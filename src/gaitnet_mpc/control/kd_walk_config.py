@@ -90,7 +90,14 @@ LATERAL_RETURN_TIME_S = 0.7
 
 #: Fields of ``sequential.kd`` the controller sets from the robot, left at their defaults
 #: in a configuration (setting one would silently have no effect).
-ROBOT_FIELDS = ("mass_kg", "toe_m", "heel_m", "yaw_cone_half_m", "min_foot_separation_m")
+ROBOT_FIELDS = (
+    "mass_kg",
+    "inertia_kgm2",
+    "toe_m",
+    "heel_m",
+    "yaw_cone_half_m",
+    "min_foot_separation_m",
+)
 
 
 @dataclass(frozen=True)
@@ -294,10 +301,10 @@ def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:
 
 
 def paper_walk_config(planar: bool = False) -> KDWalkConfig:
-    """``kd --preset paper``: the paper's settings, without this project's additions; the
-    file ``presets/kd-paper.toml`` lists them (Table VIII, or for a planar robot Table V
-    from ``kd-paper.planar.toml``). README "Deviations from the paper" lists what the
-    default adds."""
+    """``kd --preset paper``: the paper's numbers (Table VIII, or for a planar robot Table V
+    from ``kd-paper.planar.toml``; Table X) read as ``docs/design/paper_weights.md``
+    derives, over the default's robot-level rows and low level; ``presets/kd-paper.toml``
+    lists them."""
     return load_preset(KDWalkConfig, "kd", "paper", planar)
 
 

@@ -61,7 +61,7 @@ def cd_terms(c: KDConfig, w: ca.SX, p: CDSymbols, h: int, mw: int, sep: bool) ->
     m = c.mass_kg
     nw = NW_CD
     g_vec = ca.DM([0.0, 0.0, -c.gravity_mps2])
-    wp, wm = np.asarray(c.w_pose), np.asarray(c.w_momentum)
+    wp, wm = c.pose_weights, c.momentum_weights
     wpc, wpf = np.asarray(c.w_p_com), np.asarray(c.w_p_foot)
     dyn, wrench, ties, seps = [], [], [], []
     cost = ca.SX(0.0)

@@ -209,8 +209,8 @@ def cd_cost(p: CDProblem, sol: CDSolution) -> float:
     pose = np.hstack([m * x[:, :3], x[:, 6:9]])
     momentum = np.hstack([x[:, 3:6], x[:, 9:12]])
     return float(
-        np.sum(np.asarray(c.w_pose) * (pose - p.H_ref[1:]) ** 2)
-        + np.sum(np.asarray(c.w_momentum) * (momentum - p.h_ref[1:]) ** 2)
+        np.sum(c.pose_weights * (pose - p.H_ref[1:]) ** 2)
+        + np.sum(c.momentum_weights * (momentum - p.h_ref[1:]) ** 2)
         + np.sum(np.asarray(c.w_p_com) * (x[:, :3] - p.p_com_ref[1:]) ** 2)
         + c.w_force * np.sum(sol.f**2)
         + c.w_moment * np.sum(sol.tau**2)

@@ -268,8 +268,8 @@ class KDSubproblem:
         diag[self._col_pf] = w_input[2]
         self._P = sp.diags(2.0 * diag, format="csc")
         # gradient factors of eq. 18 at the iterate (q = 2 W (value - reference))
-        self._q_pose = -2.0 * np.asarray(c.w_pose)
-        self._q_momentum = -2.0 * np.asarray(c.w_momentum)
+        self._q_pose = -2.0 * c.pose_weights
+        self._q_momentum = -2.0 * c.momentum_weights
         self._q_p_com = 2.0 * np.asarray(c.w_p_com)
         self._q_force = 2.0 * c.w_force
         self._q_moment = 2.0 * c.w_moment
@@ -420,8 +420,8 @@ class KDSubproblem:
         c = self.config
         pose, momentum = states[1:, :6], states[1:, 6:]
         return float(
-            np.sum(np.asarray(c.w_pose) * (pose - inputs.H_ref[1:]) ** 2)
-            + np.sum(np.asarray(c.w_momentum) * (momentum - inputs.h_ref[1:]) ** 2)
+            np.sum(c.pose_weights * (pose - inputs.H_ref[1:]) ** 2)
+            + np.sum(c.momentum_weights * (momentum - inputs.h_ref[1:]) ** 2)
             + np.sum(np.asarray(c.w_p_com) * (iterate.p_com[1:] - inputs.p_com_ref[1:]) ** 2)
             + c.w_force * np.sum(iterate.f**2)
             + c.w_moment * np.sum(iterate.tau**2)

@@ -51,6 +51,7 @@ BACKEND_OPTIONS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
 )
 
 QP_FORMS = ("sparse", "condensed")  # KDConfig.qp_form
+WEIGHT_UNITS = ("quantity", "motion")  # KDConfig.weight_units
 
 _FOOT = "the CoP's reach from the foot centre; 0: a point foot; humanoid3d 0.075 m"
 _TRUST = "per axis about the iterate; None: off; 1 m is past any step"
@@ -75,9 +76,16 @@ class KDConfig:
     unless foothold bounds give it a finite height range. ``qp_options`` are passed to
     :func:`~gaitnet_mpc.mpc.qp.make_workspace` (over :data:`BACKEND_OPTIONS`).
 
+    ``weight_units`` says what ``w_pose`` and ``w_momentum`` weigh
+    (``docs/design/paper_weights.md``): ``"quantity"``, ``H = [m p_c; angular pose]`` and
+    ``h = [l_G; k_G]`` as they are (kg m, kg m^2, kg m/s, kg m^2/s); ``"motion"``, the same
+    quantities per unit of mass on the linear rows and of ``inertia_kgm2`` on the angular
+    ones, i.e. CoM position and velocity, attitude and angular velocity (m, rad, m/s,
+    rad/s). :attr:`pose_weights` and :attr:`momentum_weights` are the diagonals the QP uses.
+
     ``mass_kg``: pass ``RobotModel.total_mass_kg``; the walking controller
-    (``KDWalkController``) sets it, ``toe_m``, ``heel_m`` and ``min_foot_separation_m``
-    from the robot, and its configuration refuses them changed
+    (``KDWalkController``) sets it, ``inertia_kgm2``, ``toe_m``, ``heel_m`` and
+    ``min_foot_separation_m`` from the robot, and its configuration refuses them changed
     (``KDWalkConfig``, ``ROBOT_FIELDS``).
     """
 
@@ -86,6 +94,12 @@ class KDConfig:
     gravity_mps2: float = bounded(
         GRAVITY_MPS2, "[0, 30] m/s^2", "an acceleration", "0: none; 30 is past Jupiter's 25"
     )
+    #: Diagonal of the centroidal inertia at the standing pose [kg m^2] (humanoid3d;
+    #: ``RobotModel.standing_inertia_kgm2``); only ``weight_units = "motion"`` reads it.
+    inertia_kgm2: tuple[float, float, float] = bounded(
+        (0.6419, 0.5757, 0.09415), "(0, 1000] kg m^2", "an inertia", "humanoid3d ~0.6 kg m^2"
+    )
+    weight_units: str = "quantity"
     w_momentum: tuple[float, ...] = weight((10.0,) * 6)  # L^h
     w_pose: tuple[float, ...] = weight((200.0,) * 6)  # L^H
     w_p_foot: tuple[float, float, float] = weight((0.1, 0.1, 0.1))  # L^{p_f}
@@ -126,6 +140,10 @@ class KDConfig:
         _size("w_pose", self.w_pose, 6)
         _size("w_p_foot", self.w_p_foot, 3)
         _size("w_p_com", self.w_p_com, 3)
+        if self.weight_units not in WEIGHT_UNITS:
+            raise ConfigError("weight_units", self.weight_units, f"one of {list(WEIGHT_UNITS)}")
+        if np.shape(self.inertia_kgm2) != (3,):
+            raise ConfigError("inertia_kgm2", self.inertia_kgm2, "3 inertias [kg m^2]")
         if self.qp_form not in QP_FORMS:
             raise ConfigError("qp_form", self.qp_form, f"one of {list(QP_FORMS)}")
         if self.qp_backend not in BACKENDS:
@@ -136,12 +154,28 @@ class KDConfig:
         of ``qp_backend``, overridden by ``qp_options``."""
         return {**BACKEND_OPTIONS.get(self.qp_backend, {}), **dict(self.qp_options)}
 
+    def _unit_scale(self) -> np.ndarray:
+        """(6,) what one unit of ``[H; h]``'s rows weighs under ``weight_units``."""
+        if self.weight_units == "quantity":
+            return np.ones(6)
+        return 1.0 / np.concatenate([[self.mass_kg] * 3, self.inertia_kgm2]) ** 2
+
+    @property
+    def pose_weights(self) -> np.ndarray:
+        """(6,) ``L^H`` on ``H = [m p_c; angular pose]`` as the QP weighs it."""
+        return np.asarray(self.w_pose, dtype=float) * self._unit_scale()
+
+    @property
+    def momentum_weights(self) -> np.ndarray:
+        """(6,) ``L^h`` on ``h = [l_G; k_G]`` as the QP weighs it."""
+        return np.asarray(self.w_momentum, dtype=float) * self._unit_scale()
+
     def stage_weights(self) -> tuple[np.ndarray, np.ndarray]:
         """Eq. 18's diagonal weights ``W`` with the proximal term (the QP's ``P = 2 W``):
         (15,) on a stage's ``x_k = [H; l_G; k_G]`` and ``delta p_c,k`` (``k >= 1``), and
         (3, 3) per axis on ``delta f``, ``delta tau``, ``delta p_f``."""
         w_state = np.concatenate(
-            [self.w_pose, self.w_momentum, np.asarray(self.w_p_com) + self.reg_position]
+            [self.pose_weights, self.momentum_weights, np.asarray(self.w_p_com) + self.reg_position]
         ).astype(float)
         w_input = np.array(
             [[self.w_force + self.reg_force] * 3, [self.w_moment + self.reg_moment] * 3,
@@ -150,4 +184,4 @@ class KDConfig:
         return w_state, w_input
 
 
-__all__ = ["BACKEND_OPTIONS", "QP_FORMS", "KDConfig"]
+__all__ = ["BACKEND_OPTIONS", "QP_FORMS", "WEIGHT_UNITS", "KDConfig"]

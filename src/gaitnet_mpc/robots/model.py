@@ -130,6 +130,16 @@ class RobotModel:
             return None
         return d + max(self.spec.foot_toe_m, self.spec.foot_heel_m) * abs(np.sin(yaw_offset_rad))
 
+    @cached_property
+    def standing_inertia_kgm2(self) -> tuple[float, float, float]:
+        """Diagonal of the centroidal composite inertia at :meth:`standing_qpos` [kg m^2]
+        (humanoid3d 0.642, 0.576, 0.094): the body's rotational inertia about its CoM."""
+        q, v = self.mj_to_pin(self.standing_qpos(), np.zeros(self.nv))
+        data = self.pin_model.createData()
+        pin.ccrba(self.pin_model, data, q, v)
+        ixx, iyy, izz = (float(x) for x in np.diag(data.Ig.inertia))
+        return ixx, iyy, izz
+
     # ------------------------------------------------------------ conversions
     def mj_to_pin(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """MuJoCo (qpos, qvel) -> Pinocchio (q, v); see the module docstring."""

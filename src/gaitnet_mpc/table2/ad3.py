@@ -101,7 +101,7 @@ class AD3:
         h = p.horizon
         cols = cd_columns(h)
         m = c.mass_kg
-        wp, wm = np.asarray(c.w_pose), np.asarray(c.w_momentum)
+        wp, wm = c.pose_weights, c.momentum_weights
         diag = np.zeros(NW * h)
         wt = np.zeros(NW * h)
         w_pc1, w_pc2 = wp[:3] * m**2, np.asarray(c.w_p_com)

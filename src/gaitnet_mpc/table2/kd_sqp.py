@@ -200,7 +200,7 @@ class ExplicitKDSQP:
         }
         params = ca.vertcat(*par.values())
         g_vec = ca.DM([0.0, 0.0, -c.gravity_mps2])
-        wp, wm = np.asarray(c.w_pose), np.asarray(c.w_momentum)
+        wp, wm = c.pose_weights, c.momentum_weights
         wpc, wpf = np.asarray(c.w_p_com), np.asarray(c.w_p_foot)
         contact = p.cd.contact
         touchdown, standing = foot_events(contact)
