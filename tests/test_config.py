@@ -22,8 +22,8 @@ from gaitnet_mpc.mpc.sequential import SequentialConfig
 
 def _paper_walk_config(planar: bool) -> KDWalkConfig:
     """``kd --preset paper`` written out: Table VIII (planar: Table V) read per unit of
-    motion, Table X, no disturbance observer and (humanoid) the net taught by this preset's
-    ``kd``, over the default preset (its robot-level rows and low level, issue 49)."""
+    motion, Table X, H_ref by eq. 30, no disturbance observer and (humanoid) the net taught
+    by this preset's ``kd``, over the default preset (its robot-level rows and low level)."""
     default = _default_walk_config(planar)
     if planar:
         kd = KDConfig(
@@ -39,7 +39,7 @@ def _paper_walk_config(planar: bool) -> KDWalkConfig:
     net = None if planar else "humanoid3d-kd-paper"  # taught by this preset's kd
     return replace(
         default,
-        sequential=SequentialConfig(kd=kd),
+        sequential=SequentialConfig(kd=kd, reference_pose="eq30"),
         dt_policy=DtPolicyConfig(gaitnet_weights=net),
         disturbance_observer=None,
     )

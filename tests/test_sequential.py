@@ -425,3 +425,31 @@ def test_warm_started_replans_start_from_the_last_plan(humanoid) -> None:
         first_steps[warm] = firsts
     assert len(first_steps[True]) > 10
     assert np.median(first_steps[True]) < 0.2 * np.median(first_steps[False])
+
+
+def test_reference_pose_selects_eq30_in_f_ref_and_f_ik(humanoid) -> None:
+    """``SequentialConfig.reference_pose = "eq30"`` (the paper preset's) makes the MPC's
+    reference workspace build ``H_ref`` by eq. 30; the first plan still converges, and its
+    ``H_ref`` differs from the Riemann one by O(dt) only. A bad name is a named error."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+    from gaitnet_mpc.errors import ConfigError
+    from gaitnet_mpc.mpc.sequential import SequentialConfig
+
+    course, command = load_course("flat"), Command(vx_mps=0.5)
+    refs = {}
+    for pose in ("riemann", "eq30"):
+        base = KDWalkConfig()
+        config = replace(base, sequential=replace(base.sequential, reference_pose=pose))
+        ctrl = KDWalkController(humanoid, TerrainView(course), command, config=config)
+        assert ctrl.mpc.ref_workspace.config.pose_method == pose
+        state = Simulator(humanoid, course).state()
+        ctrl.reset(state)
+        ctrl.compute(state)
+        assert ctrl.plan.converged
+        refs[pose] = ctrl.plan.reference.H_ref
+    diff = np.abs(refs["eq30"] - refs["riemann"])
+    assert 0.0 < diff.max() < 0.02  # kg m / kg m^2; 0.007 when written
+    with pytest.raises(ConfigError, match="reference_pose"):
+        SequentialConfig(reference_pose="trapezoid")

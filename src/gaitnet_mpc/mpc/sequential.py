@@ -24,7 +24,7 @@ import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Protocol
+from typing import Literal, Protocol, cast
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import euler_map_and_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
     CentroidalReference,
+    ReferenceConfig,
     ReferenceTiming,
     ReferenceWorkspace,
     make_reference,
@@ -213,10 +214,16 @@ class SequentialConfig:
     dt_tolerance_s: float = bounded(
         1e-4, "[0, 0.01] s", "a dt change", "a coarser one drops most changes within 0.045-0.07 s"
     )
+    # H_ref of f_ref / f_IK (ReferenceConfig.pose_method): "riemann", the left Riemann sum
+    # that the MPC's eq. 10 propagates (linear part m p_c exactly); "eq30", the paper's
+    # integration by parts (eq. 12 = eq. 30).
+    reference_pose: str = "riemann"
 
     def __post_init__(self) -> None:
         if not isinstance(self.j_max, int):
             raise ConfigError("j_max", self.j_max, "an integer")
+        if self.reference_pose not in ("riemann", "eq30"):
+            raise ConfigError("reference_pose", self.reference_pose, "'riemann' or 'eq30'")
         check_ranges(self)
 
 
@@ -302,7 +309,8 @@ class SequentialKDMPC:
         self.config = config or SequentialConfig()
         self.dt_policy: DtPolicy = dt_policy or FixedDt()
         self.subproblem = KDSubproblem(self.config.kd)
-        self.ref_workspace = ReferenceWorkspace(robot)
+        pose_method = cast(Literal["riemann", "eq30"], self.config.reference_pose)
+        self.ref_workspace = ReferenceWorkspace(robot, ReferenceConfig(pose_method=pose_method))
         self.pin_data = robot.pin_model.createData()
 
     def _references(
