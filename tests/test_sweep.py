@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from gaitnet_mpc.cli import main
+from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.experiments.sweep_cases import (
     DIRECTIONS,
     bisect_largest,
@@ -115,6 +116,27 @@ def test_controller_specs_carry_a_dt_and_a_preset() -> None:
     assert parse_controller("gaitnet:humanoid3d-dagger+realtime") == ControllerSpec(
         "gaitnet", None, "realtime", "humanoid3d-dagger"
     )
+
+
+def test_a_settings_file_in_a_controller_spec_is_a_config_file(tmp_path: Path) -> None:
+    """``gaitnet+FILE.toml`` builds the scenario as ``run --config FILE.toml`` would; a
+    file with an unknown key is refused before any case starts."""
+    from gaitnet_mpc.experiments.sweep import SweepSettings, check_inputs
+    from gaitnet_mpc.experiments.sweep_cases import parse_controller
+    from gaitnet_mpc.scenario import make_scenario
+
+    file = tmp_path / "pose.toml"
+    file.write_text("[sequential.kd]\nw_pose = [1.0, 1.0, 1.0, 20000.0, 20000.0, 2000.0]\n")
+    args = parse_controller(f"gaitnet+{file}").scenario_args()
+    assert args["preset"] is None and args["config_file"] == str(file)
+    scenario = make_scenario(**args, duration_s=1.0)
+    assert scenario == make_scenario(controller="gaitnet", config_file=file, duration_s=1.0)
+    assert scenario != make_scenario(controller="gaitnet", duration_s=1.0)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[sequential.kd]\nw_posture = 1.0\n")
+    settings = SweepSettings("push", (f"gaitnet+{bad}",), speeds_mps=(0.5,))
+    with pytest.raises(ConfigError, match="w_posture"):
+        check_inputs(settings, tmp_path / "out")
 
 
 def test_a_part_of_the_push_grid() -> None:

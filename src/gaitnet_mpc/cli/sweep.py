@@ -38,8 +38,8 @@ def add_parser(sub: Any) -> None:
         "--controllers",
         default=None,
         help=f"comma-separated, NAME[@DT][:WEIGHTS][+PRESET]: a fixed MPC dt [s], Gait-Net "
-        f"weights (a shipped name or a path) and a preset, e.g. kd@0.055, "
-        f"gaitnet:humanoid3d-dagger or gaitnet+realtime "
+        f"weights (a shipped name or a path) and a preset or a settings file (as --config), "
+        f"e.g. kd@0.055, gaitnet:humanoid3d-dagger, gaitnet+realtime or gaitnet+my.toml "
         f"(default: {','.join(DEFAULT_CONTROLLERS)}; with --quick: srbm)",
     )
     s.add_argument(

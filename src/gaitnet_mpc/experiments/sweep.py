@@ -141,20 +141,13 @@ class SweepSettings:
 def check_inputs(settings: SweepSettings, folder: Path) -> Path:
     """What a worker would find wrong, found before any case starts: the output path and
     every controller's settings (``@DT`` in the accepted range, ``+PRESET`` one of the
-    controller's presets)."""
+    controller's presets or a settings file)."""
     from gaitnet_mpc.scenario import make_scenario
 
     folder = check_output_path(folder, "--out")
     for spec in settings.controllers:
-        c = parse_controller(spec)
         try:
-            make_scenario(
-                controller=c.name,
-                dt_s=c.dt_s,
-                preset=c.preset,
-                gaitnet_weights=c.weights,
-                duration_s=1.0,
-            )
+            make_scenario(**parse_controller(spec).scenario_args(), duration_s=1.0)
         except ConfigError as exc:
             raise ConfigError("--controllers", spec, f"a valid controller ({exc})") from None
     return folder

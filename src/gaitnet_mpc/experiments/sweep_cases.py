@@ -141,20 +141,32 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
 
 
 class ControllerSpec(NamedTuple):
-    """A sweep's controller: a registry name, an optional fixed dt [s], preset and Gait-Net
-    weights."""
+    """A sweep's controller: a registry name, an optional fixed dt [s], preset (or a
+    settings file ``*.toml`` over the default preset) and Gait-Net weights."""
 
     name: str
     dt_s: float | None = None
     preset: str | None = None
     weights: str | None = None
 
+    def scenario_args(self) -> dict[str, Any]:
+        """The controller's arguments of :func:`~gaitnet_mpc.scenario.make_scenario`."""
+        is_file = self.preset is not None and self.preset.endswith(".toml")
+        return {
+            "controller": self.name,
+            "dt_s": self.dt_s,
+            "preset": None if is_file else self.preset,
+            "config_file": self.preset if is_file else None,
+            "gaitnet_weights": self.weights,
+        }
+
 
 def parse_controller(spec: str) -> ControllerSpec:
     """``kd@0.055+realtime`` -> (``kd``, 0.055, ``realtime``): a registry name, an optional
     fixed dt [s] and an optional preset (as ``gaitnet-mpc run --dt 0.055 --preset
-    realtime``); ``gaitnet+realtime`` has no dt; ``gaitnet:humanoid3d-dagger`` names the
-    Gait-Net weights (as ``--gaitnet-weights``: a shipped name or a path without ``+``)."""
+    realtime``), or a settings file ``+FILE.toml`` (as ``--config FILE.toml``);
+    ``gaitnet+realtime`` has no dt; ``gaitnet:humanoid3d-dagger`` names the Gait-Net
+    weights (as ``--gaitnet-weights``: a shipped name or a path without ``+``)."""
     from gaitnet_mpc.errors import ConfigError
 
     form = "NAME[@DT][:WEIGHTS][+PRESET]"
@@ -267,15 +279,7 @@ def _build(controller: str, *, vx_mps: float, duration_s: float, **scenario: Any
 
     spec = parse_controller(controller)
     return build_episode(
-        make_scenario(
-            controller=spec.name,
-            preset=spec.preset,
-            gaitnet_weights=spec.weights,
-            vx_mps=vx_mps,
-            duration_s=duration_s,
-            dt_s=spec.dt_s,
-            **scenario,
-        )
+        make_scenario(**spec.scenario_args(), vx_mps=vx_mps, duration_s=duration_s, **scenario)
     )
 
 
