@@ -108,7 +108,9 @@ from gaitnet_mpc.kinematics.foot_plan import (
     neutral_foothold,
 )
 from gaitnet_mpc.kinematics.reference_workspace import (
+    POSE_METHODS,
     CentroidalReference,
+    PoseMethod,
     ReferenceConfig,
     ReferenceWorkspace,
 )
@@ -116,7 +118,9 @@ from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
 __all__ = [
+    "POSE_METHODS",
     "CentroidalReference",
+    "PoseMethod",
     "ReferenceConfig",
     "ReferenceTiming",
     "ReferenceWorkspace",

@@ -29,6 +29,11 @@ from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.robots.spec import FEET
 
 _N_FEET = len(FEET)
+
+#: Definitions of ``H_ref`` (``ReferenceConfig.pose_method``; the module docstring of
+#: :mod:`~gaitnet_mpc.kinematics.reference`).
+PoseMethod = Literal["riemann", "eq30"]
+POSE_METHODS: tuple[PoseMethod, ...] = ("riemann", "eq30")
 _GAIN_PROBE_M = 0.01  # trunk / foot displacement that probes the CoM gains [m]
 
 
@@ -53,7 +58,7 @@ class ReferenceConfig:
     swing_apex_height_m: float = 0.06
     trunk_pitch_rad: float = 0.0
     com_iterations: int = 1
-    pose_method: Literal["riemann", "eq30"] = "riemann"
+    pose_method: PoseMethod = "riemann"
 
     def __post_init__(self) -> None:
         if self.com_height_m is not None and not _positive(self.com_height_m):
@@ -67,8 +72,8 @@ class ReferenceConfig:
         n = self.com_iterations
         if not isinstance(n, int | np.integer) or isinstance(n, bool) or n < 0:
             raise ConfigError("com_iterations", n, "an integer >= 0")
-        if self.pose_method not in ("riemann", "eq30"):
-            raise ConfigError("pose_method", self.pose_method, "'riemann' or 'eq30'")
+        if self.pose_method not in POSE_METHODS:
+            raise ConfigError("pose_method", self.pose_method, f"one of {list(POSE_METHODS)}")
 
 
 def _is_number(value: object) -> bool:

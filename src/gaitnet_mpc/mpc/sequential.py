@@ -24,7 +24,7 @@ import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Literal, Protocol, cast
+from typing import Protocol, cast
 
 import numpy as np
 
@@ -39,7 +39,9 @@ from gaitnet_mpc.dt_policy import (
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.kinematics.centroidal import euler_map_and_coordinates, f_j2m
 from gaitnet_mpc.kinematics.reference import (
+    POSE_METHODS,
     CentroidalReference,
+    PoseMethod,
     ReferenceConfig,
     ReferenceTiming,
     ReferenceWorkspace,
@@ -222,8 +224,8 @@ class SequentialConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.j_max, int):
             raise ConfigError("j_max", self.j_max, "an integer")
-        if self.reference_pose not in ("riemann", "eq30"):
-            raise ConfigError("reference_pose", self.reference_pose, "'riemann' or 'eq30'")
+        if self.reference_pose not in POSE_METHODS:
+            raise ConfigError("reference_pose", self.reference_pose, f"one of {list(POSE_METHODS)}")
         check_ranges(self)
 
 
@@ -309,7 +311,7 @@ class SequentialKDMPC:
         self.config = config or SequentialConfig()
         self.dt_policy: DtPolicy = dt_policy or FixedDt()
         self.subproblem = KDSubproblem(self.config.kd)
-        pose_method = cast(Literal["riemann", "eq30"], self.config.reference_pose)
+        pose_method = cast(PoseMethod, self.config.reference_pose)  # checked in the config
         self.ref_workspace = ReferenceWorkspace(robot, ReferenceConfig(pose_method=pose_method))
         self.pin_data = robot.pin_model.createData()
 
