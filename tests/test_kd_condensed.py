@@ -39,8 +39,13 @@ def _agree(sub: KDSubproblem, ours: Any, ref: Any) -> None:
 
 @pytest.mark.parametrize(
     "extra",
-    [{}, {"min_foot_separation_m": 0.06}, {"trust_region_com_m": 0.05, "trust_region_m": None}],
-    ids=["default", "separation", "com-trust"],
+    [
+        {},
+        {"min_foot_separation_m": 0.06},
+        {"trust_region_com_m": 0.05, "trust_region_m": None},
+        {"leg_reach_m": 0.45},
+    ],
+    ids=["default", "separation", "com-trust", "reach"],
 )
 def test_condensed_matches_sparse_on_random_subproblems(extra: dict[str, Any]) -> None:
     sparse = KDSubproblem(KDConfig(mass_kg=MASS, horizon=6, **extra))

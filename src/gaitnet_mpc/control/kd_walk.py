@@ -27,7 +27,7 @@ from gaitnet_mpc.control.base import MomentumPrediction
 from gaitnet_mpc.control.blind_touchdown import TouchdownSearch
 from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.dt_policies import make_dt_policy
-from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, robot_kd_config
 from gaitnet_mpc.control.swing_obstacles import SwingObstacles
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
@@ -88,18 +88,7 @@ class KDWalkController(WalkingBase):
             raise ConfigError(
                 "terrain.knowledge.multi_step", False, "True with KDWalkConfig.preview set"
             )
-        kd = replace(
-            self.config.sequential.kd,
-            mass_kg=robot.total_mass_kg,
-            inertia_kgm2=robot.standing_inertia_kgm2,
-            toe_m=self.config.cop_fraction * robot.spec.foot_toe_m,
-            heel_m=self.config.cop_fraction * robot.spec.foot_heel_m,
-            yaw_cone_half_m=0.5 * (robot.spec.foot_toe_m + robot.spec.foot_heel_m),
-            min_foot_separation_m=(
-                robot.min_foot_separation_m if self.config.keep_feet_apart else None
-            ),
-        )
-        sequential = replace(self.config.sequential, kd=kd)
+        sequential = replace(self.config.sequential, kd=robot_kd_config(self.config, robot))
         if dt_policy is None:
             dt_policy = make_dt_policy(self.config.dt_policy, robot, sequential)
         self.name = CONTROLLER_OF_POLICY[self.config.dt_policy.kind]

@@ -25,7 +25,9 @@ from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import SwingConfig
 from gaitnet_mpc.gait.preview import PreviewConfig
 from gaitnet_mpc.mpc.implicit_kd import KDConfig
+from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
 from gaitnet_mpc.mpc.sequential import SequentialConfig
+from gaitnet_mpc.robots.model import RobotModel
 from gaitnet_mpc.terrain import Course
 
 
@@ -97,6 +99,9 @@ ROBOT_FIELDS = (
     "heel_m",
     "yaw_cone_half_m",
     "min_foot_separation_m",
+    "leg_reach_m",
+    "hip_offset_m",
+    "reach_tilt_rad",
 )
 
 
@@ -239,6 +244,10 @@ class KDWalkConfig:
     # (KDConfig.min_foot_separation_m = RobotModel.min_foot_separation_m) and swing targets
     # held on the swing foot's own side of the stance foot. False: the paper's QP.
     keep_feet_apart: bool = True
+    # Keep each planned stance foot within its leg's length of the hip (beyond the paper):
+    # reach rows in the QP (mpc/kinematic_rows.py; KDConfig.leg_reach_m and hip_offset_m from the
+    # robot). False: no such rows, as the paper.
+    keep_feet_in_reach: bool = False
     # Fraction of the foot's toe and heel distances the MPC may move the centre of pressure
     # to (the wrench rows of mpc/contact.py; 1: the whole foot, as the paper). At the toe
     # or heel the box foot tips onto one edge, loses its yaw friction and spins (2 pivots
@@ -273,7 +282,8 @@ class KDWalkConfig:
                 raise ConfigError(
                     f"sequential.kd.{name}", getattr(kd, name),
                     f"its default {getattr(default, name)}: the controller takes it from the "
-                    "robot (cop_fraction scales the foot, keep_feet_apart sets the separation)",
+                    "robot (cop_fraction scales the foot, keep_feet_apart sets the separation, "
+                    "keep_feet_in_reach the reach)",
                 )  # fmt: skip
         lo, hi = self.sequential.dt_bounds_s
         policy = self.dt_policy
@@ -285,6 +295,25 @@ class KDWalkConfig:
                     f"within sequential.dt_bounds_s [{lo:g}, {hi:g}] s (every dt is clipped "
                     "into those)",
                 )  # fmt: skip
+
+
+def robot_kd_config(config: KDWalkConfig, robot: RobotModel) -> KDConfig:
+    """``config.sequential.kd`` with the :data:`ROBOT_FIELDS` taken from ``robot``."""
+    kd = config.sequential.kd
+    if config.keep_feet_in_reach:
+        if robot.spec.planar:
+            raise ConfigError("keep_feet_in_reach", True, "False for a planar robot")
+        hips, leg_m, tilt_rad = reach_geometry(robot)
+        kd = replace(kd, hip_offset_m=hips, leg_reach_m=leg_m, reach_tilt_rad=tilt_rad)
+    return replace(
+        kd,
+        mass_kg=robot.total_mass_kg,
+        inertia_kgm2=robot.standing_inertia_kgm2,
+        toe_m=config.cop_fraction * robot.spec.foot_toe_m,
+        heel_m=config.cop_fraction * robot.spec.foot_heel_m,
+        yaw_cone_half_m=0.5 * (robot.spec.foot_toe_m + robot.spec.foot_heel_m),
+        min_foot_separation_m=robot.min_foot_separation_m if config.keep_feet_apart else None,
+    )
 
 
 def preview_walk_config(base: KDWalkConfig | None = None) -> KDWalkConfig:

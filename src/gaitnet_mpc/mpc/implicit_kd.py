@@ -77,6 +77,7 @@ Constraints (inequality rows ``l <= A z <= u`` and box ``lb <= z <= ub``)
   bilinear problem is unbounded in practice: lowering a foot below the ground lengthens
   the lever arm of the horizontal forces, so the moment cost ``L^tau`` can be traded for
   the tiny ``L^{p_f}`` and the sequential iteration drifts or oscillates.
+* Leg reach (``leg_reach_m``, not in the paper): :mod:`~gaitnet_mpc.mpc.kinematic_rows`.
 * Trust region: each tie group of ``p_f`` stays within ``trust_region_m`` (per axis) of the
   mean of its iterate positions; the axis is left free where this box misses the foothold
   bounds. ``delta p_c`` is only trust-bounded if ``trust_region_com_m`` is set: eq. 20 pins
@@ -117,6 +118,7 @@ from gaitnet_mpc.mpc.kd_config import KDConfig
 from gaitnet_mpc.mpc.kd_inputs import KDInputs
 from gaitnet_mpc.mpc.kd_iterate import KDIterate, KDStep, KDTolerances
 from gaitnet_mpc.mpc.kd_layout import KDLayout
+from gaitnet_mpc.mpc.kinematic_rows import qp_reach_rows, separation_rows
 from gaitnet_mpc.mpc.qp import QPProblem, QPSolution, QPWorkspace, make_workspace
 from gaitnet_mpc.mpc.qp.pattern import BlockPattern
 
@@ -193,10 +195,12 @@ class KDSubproblem:
     @property
     def m_ineq(self) -> int:
         """Inequality rows: wrench rows per foot and stage, ``p_f`` tie rows, then (with
-        ``min_foot_separation_m``) one lateral-separation row per stage."""
+        ``min_foot_separation_m``) one lateral-separation row per stage and (with
+        ``leg_reach_m``) four reach rows per stage and foot."""
         h = self.horizon
         n_sep = h if self.config.min_foot_separation_m is not None else 0
-        return N_FEET * h * self.n_wrench_rows + N_FEET * 3 * (h - 1) + n_sep
+        n_reach = 4 * N_FEET * h if self.config.leg_reach_m is not None else 0
+        return N_FEET * h * self.n_wrench_rows + N_FEET * 3 * (h - 1) + n_sep + n_reach
 
     def _build_patterns(self) -> None:
         """Reserve every nonzero of ``A_eq`` and ``A``, one vectorised group per kind of
@@ -248,6 +252,13 @@ class KDSubproblem:
             sep_rows = (tie0 + N_FEET * 3 * (h - 1) + np.arange(h))[:, None]  # (h, 1)
             sep_cols = self._col_pf[:, :, :2].reshape(h, 2 * N_FEET)  # (h, 4): xL yL xR yR
             self._s_sep = ineq.add(sep_rows, sep_cols)  # (h, 1, 4)
+        self._s_reach: slice | None = None
+        if self.config.leg_reach_m is not None:  # the last rows: n^T (dpf_k,i - dpc_k)
+            n_reach = 4 * N_FEET * h
+            reach_rows = self.m_ineq - n_reach + np.arange(n_reach).reshape(h, N_FEET, 4)
+            pc = np.broadcast_to(self._col_pc[:-1, None, :], (h, N_FEET, 3))
+            reach_cols = np.concatenate([self._col_pf, pc], axis=2)  # (h, 2, 6)
+            self._s_reach = ineq.add(reach_rows, reach_cols)  # (h, 2, 4, 6)
         ineq.finalize()
         self._ineq = ineq
         data = np.zeros(ineq.nnz)
@@ -298,12 +309,10 @@ class KDSubproblem:
             x0: (12,) measured ``[H; l_G; k_G]``.
             h_ref: (h + 1, 6) momentum reference ``[l_G; k_G]``; row 0 unused.
             H_ref: (h + 1, 6) centroidal-pose reference; row 0 unused.
-            p_foot_ref: (h, 2, 3) foot reference [m] (swing stages: planned foothold).
-            p_com_ref: (h + 1, 3) CoM reference [m]; row 0 unused.
-            dts_s: (h,) per-stage sampling time [s].
-            contact: (h, 2) stance mask (True = stance), feet ordered as
-                :data:`~gaitnet_mpc.robots.FEET`.
-            foot_yaw_rad: (h, 2) foot heading (line-foot wrench limits).
+            p_foot_ref: (h, 2, 3) foot reference [m] (swing stages: planned foothold);
+                p_com_ref: (h + 1, 3) CoM reference [m]; row 0 unused.
+            dts_s: (h,) per-stage sampling time [s]; contact: (h, 2) stance mask (True =
+                stance), feet as :data:`~gaitnet_mpc.robots.FEET`; foot_yaw_rad: (h, 2).
             foothold_bounds: foot name -> ``(p_min (3,) | None, p_max (3,) | None,
                 stage_mask (h,) | None)`` (eq. 24); a ``None`` mask means the foot's next
                 touchdown (:func:`next_touchdown_mask`).
@@ -319,12 +328,9 @@ class KDSubproblem:
             foot_yaw_rad, foothold_bounds, p_foot_measured, wrench_ext,
         )  # fmt: skip
 
-    def build(self, iterate: KDIterate, inputs: KDInputs) -> QPProblem:
-        """The CMPC QP of iteration ``j + 1`` about ``iterate`` (``j``), eqs. 13-24."""
-        return self._assemble(iterate, inputs)
-
-    def _assemble(self, it: KDIterate, a: KDInputs) -> QPProblem:
-        """The QP of :meth:`build`, every stage and foot at once (vectorised)."""
+    def build(self, it: KDIterate, a: KDInputs) -> QPProblem:
+        """The CMPC QP of iteration ``j + 1`` about the iterate ``it`` (``j``), eqs. 13-24,
+        every stage and foot at once (vectorised)."""
         c = self.config
         h = self.horizon
         m = c.mass_kg
@@ -369,12 +375,18 @@ class KDSubproblem:
         lo_parts = [lo_w.ravel(), np.where(free, -_FREE_TIE_M, gap).ravel()]
         hi_parts = [hi_w.ravel(), np.where(free, _FREE_TIE_M, gap).ravel()]
         if self._s_sep is not None:
-            n_y, sep = self._separation(it, contact, a.foot_yaw_rad)
+            n_y, sep = separation_rows(it, contact, a.foot_yaw_rad)
             data[self._s_sep] = np.concatenate([n_y, -n_y], axis=1).ravel()
             yaw = a.foot_yaw_rad
             sweep = max(c.toe_m, c.heel_m) * np.abs(np.sin(yaw[:, 0] - yaw[:, 1]))
             lo_parts.append(c.min_foot_separation_m + sweep - sep)
             hi_parts.append(_FREE_TIE_M - sep)
+        lo_pf, hi_pf = a.foot_bounds(it, c.foot_height_from_reference, c.trust_region_m)
+        if self._s_reach is not None:
+            active, normal, bound = qp_reach_rows(c, it, a, lo_pf, hi_pf)
+            data[self._s_reach] = np.concatenate([normal, -normal], axis=3).ravel()
+            lo_parts.append(np.full(4 * N_FEET * h, -_FREE_TIE_M))
+            hi_parts.append(np.where(active[..., None], bound, _FREE_TIE_M).ravel())
         lo = np.concatenate(lo_parts)
         hi = np.concatenate(hi_parts)
         a_in = self._ineq.csc(data)
@@ -382,7 +394,6 @@ class KDSubproblem:
         # ---- box: foot positions (measured stance foot, eq. 24, trust region)
         lb = np.full(self.n, -np.inf)
         ub = np.full(self.n, np.inf)
-        lo_pf, hi_pf = a.foot_bounds(it, c.foot_height_from_reference, c.trust_region_m)
         lb[self._col_pf] = lo_pf - it.p_foot
         ub[self._col_pf] = hi_pf - it.p_foot
         if c.trust_region_com_m is not None:
@@ -398,20 +409,6 @@ class KDSubproblem:
         q[self._col_tau] = self._q_moment * it.tau
         q[self._col_pf] = self._q_p_foot * (it.p_foot - a.p_foot_ref)
         return QPProblem(self._P, q, A_eq=a_eq, b_eq=b, A=a_in, l=lo, u=hi, lb=lb, ub=ub)
-
-    @staticmethod
-    def _separation(
-        it: KDIterate, contact: np.ndarray, foot_yaw_rad: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Leftward axes ``n_y(psi_k)`` (h, 2) of the separation rows (``psi_k``: the
-        heading of the foot in swing at stage ``k``, the right foot's where both or neither
-        stand) and the iterate's separation ``n_y^T (p_left - p_right)`` (h,) [m]."""
-        h = contact.shape[0]
-        swing = np.where(contact[:, 1] & ~contact[:, 0], 0, 1)
-        yaw = foot_yaw_rad[np.arange(h), swing]
-        n_y = np.stack([-np.sin(yaw), np.cos(yaw)], axis=1)  # left = +y of the heading
-        d = it.p_foot[:, 0, :2] - it.p_foot[:, 1, :2]
-        return n_y, np.einsum("kj,kj->k", n_y, d)
 
     def plan_cost(self, iterate: KDIterate, states: np.ndarray, inputs: KDInputs) -> float:
         """Eq. 18 at a plan: ``iterate`` (footholds, CoM path, wrenches) with the predicted

@@ -51,6 +51,7 @@ from gaitnet_mpc.mpc import kd_condensed_kernel as kernel
 from gaitnet_mpc.mpc.kd_config import KDConfig
 from gaitnet_mpc.mpc.kd_inputs import KDInputs
 from gaitnet_mpc.mpc.kd_iterate import KDIterate
+from gaitnet_mpc.mpc.kinematic_rows import qp_reach_rows
 from gaitnet_mpc.mpc.qp.solution import QPSolution
 
 try:
@@ -136,11 +137,12 @@ class KDCondensed:
             lo, hi: (h, 2, 3) absolute foot bounds (:func:`kd_condensed_kernel.foot_bounds`).
         """
         c_w, l_w, u_w = wrench_rows
+        reach = qp_reach_rows(self.config, it, a, lo, hi)
         out = kernel.condense(
             a.dts_s, a.contact, self._mass, self._affine(a), it.f, it.tau, it.p_foot,
             it.p_com, a.x0, a.H_ref, a.h_ref, a.p_com_ref, a.p_foot_ref, self._p_state,
             self._p_input, self._q_input, self._q_p_com, c_w, l_w, u_w, lo, hi,
-            a.foot_yaw_rad, self._min_sep, self._sweep, self._trust_com,
+            a.foot_yaw_rad, self._min_sep, self._sweep, self._trust_com, *reach,
         )  # fmt: skip
         names = ("H", "f", "A", "bupper", "blower", "sense")
         return CondensedQP(dict(zip(names, out[:6], strict=True)), *out[6:])

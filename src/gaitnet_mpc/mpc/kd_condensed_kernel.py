@@ -206,6 +206,9 @@ def condense(
     min_separation_m: float,
     sweep_m: float,
     trust_com_m: float,
+    reach_active: np.ndarray,
+    reach_normal: np.ndarray,
+    reach_bound: np.ndarray,
 ) -> tuple[
     np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
     np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -226,6 +229,8 @@ def condense(
         lo, hi: (h, 2, 3) foot bounds (:func:`foot_bounds`).
         foot_yaw: (h, 2); min_separation_m: NaN for no separation rows; sweep_m: the
             longer of toe and heel; trust_com_m: NaN for no CoM trust region.
+        reach_active, reach_normal, reach_bound: the reach rows
+            (:func:`~gaitnet_mpc.mpc.kinematic_rows.reach_rows`).
 
     Returns:
         ``H, f, A, upper, lower, sense`` (the first ``n_u`` bounds are the box on ``u``),
@@ -330,7 +335,7 @@ def condense(
                             q = q_input_w[2, a] * (p_foot[k, i, a] - p_foot_ref[k, i, a])
                         hess[j, j] += p_input[kind, a]
                         grad[j] += p_input[kind, a] * value + q
-    # ---- rows: stance wrench rows (eqs. 21-23), separation rows, CoM trust region
+    # ---- rows: stance wrench rows (eqs. 21-23), separation rows, CoM trust region, reach
     mw = c_w.shape[2]
     n_stance = 0
     for k in range(h):
@@ -338,7 +343,11 @@ def condense(
             n_stance += contact[k, i]
     n_sep = 0 if math.isnan(min_separation_m) else h
     n_trust = 0 if math.isnan(trust_com_m) else 3 * h
-    n_rows = n_stance * mw + n_sep + n_trust
+    n_reach = 0
+    for k in range(h):
+        for i in range(2):
+            n_reach += reach_active[k, i] * reach_normal.shape[2]
+    n_rows = n_stance * mw + n_sep + n_trust + n_reach
     rows = np.zeros((n_rows, n_u))
     upper = np.empty(n_u + n_rows)
     lower = np.empty(n_u + n_rows)
@@ -380,6 +389,23 @@ def condense(
                 rows[row] = mm[k, 12 + a]
                 lower[n_u + row] = -trust_com_m - mv[k, 12 + a]
                 upper[n_u + row] = trust_com_m - mv[k, 12 + a]
+                row += 1
+    for k in range(h):  # n_m^T (dpf_k,i - dpc_k) <= bound (kinematic_rows)
+        for i in range(2):
+            if not reach_active[k, i]:
+                continue
+            for face in range(reach_normal.shape[2]):
+                value = 0.0
+                for a in range(3):
+                    n_a = reach_normal[k, i, face, a]
+                    value += n_a * (m_in[k, i, 2, a] - mv[k, 12 + a])
+                    j = idx[k, i, 2, a]
+                    if j >= 0:
+                        rows[row, j] += n_a
+                    for col in range(n_before[k]):
+                        rows[row, col] -= n_a * mm[k, 12 + a, col]
+                lower[n_u + row] = -np.inf
+                upper[n_u + row] = reach_bound[k, i, face] - value
                 row += 1
     sense = np.zeros(n_u + n_rows, dtype=np.int32)
     for r in range(n_u + n_rows):

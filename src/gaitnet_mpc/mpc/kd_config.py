@@ -122,6 +122,18 @@ class KDConfig:
     min_foot_separation_m: float | None = bounded(
         None, "(0, 0.5] m", "a distance", "humanoid3d 0.06 m; 0.5 m is past the legs' reach"
     )
+    #: Leg length [m] from the hip pitch joint to the ankle for the reach rows of
+    #: :mod:`~gaitnet_mpc.mpc.kinematic_rows` (humanoid3d 0.44 m); None: no such rows (the
+    #: paper has none). ``hip_offset_m``: the hips' offsets ``o_i`` there, left then right;
+    #: ``reach_tilt_rad``: the tilt ``alpha`` of the rows' faces.
+    leg_reach_m: float | None = bounded(None, "(0, 2] m", "a length", "humanoid3d 0.44 m")
+    reach_tilt_rad: float = bounded(0.35, "(0, 1.5] rad", "an angle", "humanoid3d 0.35 rad")
+    hip_offset_m: tuple[float, ...] = bounded(
+        (0.0088, 0.065, -0.1316, 0.0088, -0.065, -0.1316),
+        "[-2, 2] m",
+        "an offset",
+        "humanoid3d's hips sit 0.13 m below the CoM",
+    )
     trust_region_m: float | None = bounded(0.1, "(0, 1] m", "a distance", _TRUST)
     trust_region_com_m: float | None = bounded(None, "(0, 1] m", "a distance", _TRUST)
     qp_backend: str = "piqp"  # fastest here, see the module docstring
@@ -140,6 +152,8 @@ class KDConfig:
         _size("w_pose", self.w_pose, 6)
         _size("w_p_foot", self.w_p_foot, 3)
         _size("w_p_com", self.w_p_com, 3)
+        if np.shape(self.hip_offset_m) != (6,):
+            raise ConfigError("hip_offset_m", self.hip_offset_m, "6 offsets [m], left then right")
         if self.weight_units not in WEIGHT_UNITS:
             raise ConfigError("weight_units", self.weight_units, f"one of {list(WEIGHT_UNITS)}")
         if np.shape(self.inertia_kgm2) != (3,):
