@@ -12,6 +12,7 @@ import csv
 import os
 import re
 import time
+import tomllib
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -32,7 +33,7 @@ from gaitnet_mpc.experiments.paper_figures import (
 )
 from gaitnet_mpc.experiments.reproduce_all import ITEMS, SECTIONS, reproduce_all
 from gaitnet_mpc.machine import machine_info
-from gaitnet_mpc.results.rundir import load_run
+from gaitnet_mpc.results.rundir import CONFIG, load_run
 from gaitnet_mpc.terrain import load_course
 
 pytestmark = pytest.mark.slow
@@ -112,6 +113,10 @@ def _check_files(out: Path, name: str) -> str:
         assert run.summary["duration_s"] <= QUICK_DURATION_S[name] + 1e-6
         assert not (run_dir / "video.mp4").exists()  # quick: no video
     return text
+
+
+#: A settings file of an option (the reach rows), for fig9's ``--config``.
+_REACH = Path(__file__).resolve().parents[1] / "benchmarks" / "configs" / "leg_reach.toml"
 
 
 # ----------------------------------------------------------------------------- names
@@ -283,3 +288,21 @@ def test_fig9_step_durations_within_the_bounds(everything: Path) -> None:
     run = load_run(out / "runs" / "gaitnet-payload")
     assert run.summary["payload_kg"] == 1.5
     assert "preview" in text  # the deviation from the paper's unknown terrain is stated
+
+
+def test_only_fig9_takes_a_settings_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="fig9 only") as info:
+        reproduce_figure("fig7", tmp_path / "x", quick=True, video=False, config_file=_REACH)
+    assert info.value.field == "--config"
+    assert not (tmp_path / "x").exists()
+
+
+def test_fig9_runs_with_a_settings_file(tmp_path: Path) -> None:
+    """``reproduce fig9 --config``: every run takes the file's settings, the report says so."""
+    path = reproduce_figure("fig9", tmp_path / "fig9", quick=True, video=False, config_file=_REACH)
+    assert f"settings of `{_REACH}`" in path.read_text()
+    for name in ("reference", "push", "payload", "uneven"):
+        config = tomllib.loads(
+            (tmp_path / "fig9" / "runs" / f"gaitnet-{name}" / CONFIG).read_text()
+        )
+        assert config["keep_feet_in_reach"] is True

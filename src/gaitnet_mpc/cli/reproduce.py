@@ -31,6 +31,7 @@ USED_BY: dict[str, tuple[str, ...]] = {
     "backend": ("fig6",),
     "address": ("fig6",),
     "no_progress": ("fig6",),
+    "config": ("fig9",),
 }
 #: The value of each option of :data:`USED_BY` that is not given.
 DEFAULTS: dict[str, Any] = {
@@ -47,6 +48,7 @@ DEFAULTS: dict[str, Any] = {
     "backend": "process",
     "address": None,
     "no_progress": False,
+    "config": None,
 }
 
 
@@ -125,6 +127,13 @@ def add_parser(sub: Any) -> None:
     rep.add_argument(
         "--no-progress", action="store_true", default=None, help="fig6: no line per case"
     )
+    rep.add_argument(
+        "--config",
+        type=Path,
+        metavar="FILE.toml",
+        help="fig9: a settings file for every run (as `gaitnet-mpc run --config`), to "
+        "measure an option against the figure's rules",
+    )
 
 
 def unused_options(args: argparse.Namespace) -> list[str]:
@@ -192,7 +201,10 @@ def main(args: argparse.Namespace) -> int:
         write_status(out, command=command, state="running", todo=[args.what])
         try:
             if args.what in reproduce.FIGURES:
-                report = reproduce.figure(out, args.what, quick=args.quick, video=not args.no_video)
+                report = reproduce.figure(
+                    out, args.what, quick=args.quick, video=not args.no_video,
+                    config_file=args.config,
+                )  # fmt: skip
             elif args.what == "all":
                 from gaitnet_mpc.experiments.reproduce_all import reproduce_all
 

@@ -83,8 +83,15 @@ def disturbed(name: str, run: RunFolder, t_s: np.ndarray) -> np.ndarray:
 
 
 def build_fig9(
-    out: Path, duration_s: float, video: VideoConfig | None, log: Log, quick: bool
+    out: Path,
+    duration_s: float,
+    video: VideoConfig | None,
+    log: Log,
+    quick: bool,
+    config_file: Path | None = None,
 ) -> Report:
+    """The four runs, the figure and the report; ``config_file``: a settings file for
+    every run (as ``gaitnet-mpc run --config``), to measure an option against the rules."""
     settings: dict[str, dict[str, Any]] = {
         "reference": {"course": "flat"},
         "push": {"course": "flat", "pushes": (PUSH,)},
@@ -94,7 +101,8 @@ def build_fig9(
     runs = {}
     for name in RUNS:
         scenario = make_scenario(robot=ROBOT, controller="gaitnet", vx_mps=VX_FIG9_MPS,
-                                 duration_s=duration_s, **settings[name])  # fmt: skip
+                                 duration_s=duration_s, config_file=config_file,
+                                 **settings[name])  # fmt: skip
         runs[name] = run_in_folder(scenario, out / "runs" / f"gaitnet-{name}", video, log)
     steps = {name: step_dts(run) for name, run in runs.items()}
     write_csv(out, "fig9", [
@@ -162,6 +170,7 @@ def build_fig9(
     setup = (
         f"`{ROBOT}`, `gaitnet` at {VX_FIG9_MPS:g} m/s with dt in [45, 70] ms (the paper's "
         "clip), undisturbed and under a push, an unknown payload and uneven ground."
+        + ("" if config_file is None else f" Every run with the settings of `{config_file}`.")
     )
     return Report(
         "Fig. 9: step durations under disturbances", setup, table, claims, notes,

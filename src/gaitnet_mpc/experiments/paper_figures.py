@@ -37,6 +37,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 from gaitnet_mpc.errors import ConfigError
@@ -119,7 +120,13 @@ def _stderr(line: str) -> None:
 
 
 def reproduce_figure(
-    name: str, out: Path, *, quick: bool = False, video: bool = True, log: Log = _stderr
+    name: str,
+    out: Path,
+    *,
+    quick: bool = False,
+    video: bool = True,
+    log: Log = _stderr,
+    config_file: Path | None = None,
 ) -> Path:
     """Run figure ``name``'s episodes and write its files into ``out``; return
     ``out / f"{name}.md"`` (module docstring).
@@ -128,21 +135,28 @@ def reproduce_figure(
         quick: :data:`QUICK_DURATION_S` per episode, no video.
         video: write each run folder's ``video.mp4`` (no effect with ``quick``).
         log: called with one line per finished episode.
+        config_file: a settings file for every run (``fig9`` only; as ``run --config``).
 
     Raises:
-        ConfigError: ``name`` is not one of :data:`FIGURES` (field ``figure``), or ``out``
-            is not a folder path (field ``--out``).
+        ConfigError: ``name`` is not one of :data:`FIGURES` (field ``figure``), ``out``
+            is not a folder path (field ``--out``), or ``config_file`` is given for a
+            figure other than ``fig9`` (field ``--config``).
         KeyboardInterrupt: Ctrl-C / SIGTERM stopped an episode (the run folders written so
             far are kept; the figure files are not written).
     """
     if name not in FIGURES:
         raise ConfigError("figure", name, f"one of {sorted(FIGURES)}")
     out = check_output_path(Path(out), "--out")
+    builder = _BUILDERS[name]
+    if config_file is not None:
+        if name != "fig9":
+            raise ConfigError("--config", str(config_file), "a settings file for fig9 only")
+        builder = partial(build_fig9, config_file=Path(config_file))
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     duration = (QUICK_DURATION_S if quick else DURATION_S)[name]
     camera = VideoConfig() if video and not quick else None
-    report = _BUILDERS[name](out, duration, camera, log, quick)
+    report = builder(out, duration, camera, log, quick)
     path = out / f"{name}.md"
     write_atomic(path, markdown(report, quick, duration, time.perf_counter() - t0))
     return path

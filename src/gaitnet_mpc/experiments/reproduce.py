@@ -69,12 +69,19 @@ def fig6(
     return out / "fig6.md"
 
 
-def figure(out: Path, name: str, *, quick: bool = False, video: bool = True) -> Path:
+def figure(
+    out: Path,
+    name: str,
+    *,
+    quick: bool = False,
+    video: bool = True,
+    config_file: Path | None = None,
+) -> Path:
     """Figs. 7-11 and 1(e) (``obstacle``): the humanoid's figures
-    (:mod:`~gaitnet_mpc.experiments.paper_figures`)."""
+    (:mod:`~gaitnet_mpc.experiments.paper_figures`); ``config_file``: fig9's settings."""
     from gaitnet_mpc.experiments.paper_figures import reproduce_figure
 
-    return reproduce_figure(name, out, quick=quick, video=video)
+    return reproduce_figure(name, out, quick=quick, video=video, config_file=config_file)
 
 
 def _figure_artifacts() -> dict[str, tuple[str, ...]]:
