@@ -29,12 +29,8 @@ import numpy as np
 
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.experiments.dt_rollouts import CANDIDATES_S, RolloutDt, drive
-from gaitnet_mpc.experiments.sweep_cases import (
-    DIRECTIONS,
-    PUSH_DURATION_S,
-    parse_controller,
-    push_time_s,
-)
+from gaitnet_mpc.experiments.push_timing import push_time_s
+from gaitnet_mpc.experiments.sweep_cases import DIRECTIONS, PUSH_DURATION_S, parse_controller
 from gaitnet_mpc.results.io import write_atomic
 from gaitnet_mpc.robots import load_robot
 from gaitnet_mpc.runner.loop import EpisodeLoop
@@ -44,7 +40,7 @@ from gaitnet_mpc.sim.disturbances import Push
 
 def run_case(controller: str, direction: str, phase: float, force_n: float, speed: float) -> dict:
     name, dt_s, preset, weights = parse_controller(controller)
-    t_push = push_time_s(controller, 3.0, phase)
+    t_push = push_time_s(dt_s, 3.0, phase)
     duration = t_push + PUSH_DURATION_S + 3.0
     angle = math.radians(DIRECTIONS[direction])
     push = Push(t_push, (force_n * math.cos(angle), force_n * math.sin(angle), 0.0), 0.2)

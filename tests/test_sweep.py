@@ -222,3 +222,32 @@ def test_quick_protocol_sweep_end_to_end(tmp_path: Path) -> None:
     assert "| srbm |" in text and "CPU:" in text and "Wall time" in text
     assert json.loads((out / "status.json").read_text())["state"] == "done"
     assert not (out / "push_polar.png").exists()
+
+
+# ----------------------------------------------------------------------------- push timing
+@pytest.mark.parametrize("controller", ["gaitnet", "kd@0.055"])
+def test_a_push_lands_at_its_phase_of_the_controllers_own_step(controller: str) -> None:
+    """The ``"executed"`` rule: every controller is pushed at the asked phase of its own
+    step with the left foot in the air, whatever its step durations (``gaitnet``'s vary;
+    for ``kd`` at 0.055 s the nominal grid's step after the settling time, step 2, has the
+    right foot in the air)."""
+    from gaitnet_mpc.experiments.sweep_cases import _push_case
+
+    plan = mode_plan("push", quick=True, seeds=1)
+    assert plan.phase_of == "executed"
+    case = {"controller": controller, "speed_mps": 0.5, "direction": "fwd", "phase": 0.25}
+    record = _push_case(case, plan)
+    assert record["swing_foot"] == "left"
+    assert record["phase_measured"] == pytest.approx(0.25, abs=0.01)
+
+
+def test_sweeps_made_before_the_rule_keep_the_nominal_grid() -> None:
+    from gaitnet_mpc.experiments.push_timing import push_time_s
+    from gaitnet_mpc.experiments.sweep_cases import ModePlan
+
+    old = mode_plan("push", quick=False, seeds=1).to_dict()
+    del old["phase_of"]  # a sweep folder written before the rule existed
+    assert ModePlan.from_dict(old).phase_of == "nominal"
+    assert push_time_s(None, 3.0, 0.25) == pytest.approx(14 * 0.225 + 0.25 * 0.225)
+    with pytest.raises(ConfigError, match="phase_of"):
+        ModePlan(phase_of="measured")

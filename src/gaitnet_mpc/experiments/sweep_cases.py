@@ -10,10 +10,10 @@ Modes (:data:`MODES`), humanoid3d throughout:
 
 * ``push``: the largest survivable push of :data:`PUSH_DURATION_S` at the trunk CoM per
   controller x direction (:data:`DIRECTIONS`, 8) x phase of a step x speed, by bisection
-  on the force (:func:`bisect_largest`). The push starts at ``k T + p T``: ``T = 5 dt`` the
-  nominal step (the controller's fixed dt, or the nominal 0.045 s), ``k T`` the first step
-  start at or after the settling time, ``p`` the phase. Survived: no fall within the time
-  after the push. The episodes of one bisection are the same up to the push, so that
+  on the force (:func:`bisect_largest`). The push starts at phase ``p`` of the controller's
+  own step: the first one at or after the settling time with the left foot in the air
+  (:mod:`~gaitnet_mpc.experiments.push_timing`; sweeps made before 2026-12-07 used a
+  nominal step grid). Survived: no fall within the time after the push. The episodes of one bisection are the same up to the push, so that
   part is simulated once and each force finishes in a forked copy of the process
   (:mod:`~gaitnet_mpc.experiments.forked_episode`; the same records, 2-3x less time).
 * ``protocol``: one episode per controller x seed under the data-collection protocol's
@@ -35,6 +35,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
+from gaitnet_mpc.experiments.push_timing import (
+    PHASE_RULES,
+    executed_push_time_s,
+    measured_phase,
+    push_time_s,
+    step_s,
+)
+
 MODES = ("push", "protocol", "payload", "terrain")
 
 PUSH_DURATION_S = 0.2
@@ -50,7 +58,6 @@ DIRECTIONS: dict[str, float] = {
     "fwd-right": 315.0,
 }
 #: The stages of a footstep of every walking controller at start (``T = 5 dt``).
-STAGES_PER_STEP = 5
 
 
 @dataclass(frozen=True)
@@ -70,6 +77,10 @@ class ModePlan:
         courses: courses (``payload``: built-in names; ``terrain``: ``uneven`` amplitudes
             as ``uneven:<amplitude m>`` and ``stepping-stones``).
         seeds: seeds (``protocol``: push draws; ``terrain``: course layouts).
+        phase_of: where a push's phase is measured (``push``;
+            :mod:`~gaitnet_mpc.experiments.push_timing`): ``"executed"``, in the
+            controller's own step, or ``"nominal"``, on the grid of its nominal step (the
+            rule of sweeps made before 2026-12-07, whose plans do not name it).
     """
 
     speeds_mps: tuple[float, ...] = (0.5,)
@@ -83,6 +94,13 @@ class ModePlan:
     spot_fractions: tuple[float, ...] = ()
     courses: tuple[str, ...] = ()
     seeds: tuple[int, ...] = ()
+    phase_of: str = "nominal"
+
+    def __post_init__(self) -> None:
+        from gaitnet_mpc.errors import ConfigError
+
+        if self.phase_of not in PHASE_RULES:
+            raise ConfigError("phase_of", self.phase_of, f"one of {list(PHASE_RULES)}")
 
     def to_dict(self) -> dict[str, Any]:
         from dataclasses import asdict
@@ -105,7 +123,10 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
     seed_list = tuple(range(1 if quick else seeds))
     if mode == "push":
         if quick:
-            return ModePlan((0.5,), ("fwd", "left"), (0.25,), 0.5, 0.6, hi=200.0, resolution=100.0)
+            return ModePlan(
+                (0.5,), ("fwd", "left"), (0.25,), 0.5, 0.6, hi=200.0, resolution=100.0,
+                phase_of="executed",
+            )  # fmt: skip
         return ModePlan(
             (0.25, 0.5, 0.75),
             tuple(DIRECTIONS),
@@ -115,6 +136,7 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
             hi=500.0,
             resolution=5.0,
             spot_fractions=(0.5, 0.25),
+            phase_of="executed",
         )
     if mode == "protocol":
         settle_s, duration_s = (0.5, 2.0) if quick else (2.0, 12.0)
@@ -320,36 +342,6 @@ def _episode(
     return _outcome(summary, time.perf_counter() - t0), episode.controller
 
 
-def step_s(controller: str) -> float:
-    """The nominal step duration of ``controller`` at start: 5 dt [s]."""
-    from gaitnet_mpc.dt_policy import NOMINAL_DT_S
-
-    dt = parse_controller(controller).dt_s
-    return STAGES_PER_STEP * (NOMINAL_DT_S if dt is None else dt)
-
-
-def push_time_s(controller: str, settle_s: float, phase: float) -> float:
-    """``k T + p T``: ``k T`` the first step start at or after ``settle_s``."""
-    t_step = step_s(controller)
-    return math.ceil(settle_s / t_step - 1e-9) * t_step + phase * t_step
-
-
-def _measured_phase(controller: Any, t_s: float) -> tuple[float | None, str]:
-    """Where in its executed step the push started (phase, swing foot), from the gait log."""
-    from gaitnet_mpc.control.walking_base import WalkingBase
-
-    if not isinstance(controller, WalkingBase):
-        return None, ""
-    sched = controller.schedule
-    for s in sched.step_log:
-        if s.start_time_s - 1e-9 <= t_s < s.start_time_s + s.duration_s - 1e-9:
-            return round((t_s - s.start_time_s) / s.duration_s, 3), s.swing_foot
-    if sched.step_start_time_s <= t_s:  # the episode ended inside that step
-        frac = (t_s - sched.step_start_time_s) / sched.current_step_duration_s
-        return round(frac, 3), sched.swing_foot
-    return None, ""
-
-
 def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
     """The bisection of one push case. The episodes share everything before the push, so
     where the process may fork (:func:`~gaitnet_mpc.experiments.forked_episode.fork_usable`)
@@ -360,7 +352,7 @@ def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
     from gaitnet_mpc.sim.disturbances import Push
 
     c, vx = case["controller"], case["speed_mps"]
-    t_push = push_time_s(c, plan.settle_s, case["phase"])
+    t_push = _push_time_s(c, vx, case["phase"], plan)
     duration = t_push + PUSH_DURATION_S + plan.after_s
     angle = math.radians(DIRECTIONS[case["direction"]])
     episodes: list[dict[str, Any]] = []
@@ -372,7 +364,7 @@ def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
     )
 
     def outcome(loop: Any, wall_s: float) -> dict[str, Any]:
-        phase, swing = _measured_phase(loop.controller, t_push)
+        phase, swing = measured_phase(loop.controller, t_push)
         return {**_outcome(loop.summary(wall_s), wall_s), "_phase": [phase, swing]}
 
     def survives(i: int) -> bool:
@@ -384,7 +376,7 @@ def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
             phase, swing = out.pop("_phase")
         else:
             out, ctrl = _episode(c, vx_mps=vx, duration_s=duration, pushes=pushes)
-            phase, swing = _measured_phase(ctrl, t_push)
+            phase, swing = measured_phase(ctrl, t_push)
         if not measured:
             measured.append((phase, swing))
         episodes.append({"force_n": f, **out})
@@ -402,6 +394,22 @@ def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
     if prefix is not None:
         record["prefix_wall_s"] = round(prefix.prefix_wall_s, 2)
     return record
+
+
+def _push_time_s(controller: str, vx_mps: float, phase: float, plan: ModePlan) -> float:
+    """The push start of a case by ``plan.phase_of``; the ``"executed"`` rule falls back
+    to the nominal grid where the unpushed episode fell before its step."""
+    dt_s = parse_controller(controller).dt_s
+    if plan.phase_of == "executed":
+        from gaitnet_mpc.dt_policy import ACCEPTED_DT_RANGE_S
+
+        longest_step_s = step_s(ACCEPTED_DT_RANGE_S[1])  # one step to wait for, then its own
+        probe_s = plan.settle_s + 3 * longest_step_s
+        episode = _build(controller, vx_mps=vx_mps, duration_s=probe_s)
+        t_push = executed_push_time_s(episode, plan.settle_s, phase)
+        if t_push is not None:
+            return t_push
+    return push_time_s(dt_s, plan.settle_s, phase)
 
 
 def _bounds(b: Bisection, res: float) -> dict[str, Any]:
