@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, robot_kd_config
-from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.mpc.centroidal_model import NX
 from gaitnet_mpc.mpc.implicit_kd import KDConfig, KDIterate, KDSubproblem
 from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
@@ -26,14 +25,14 @@ def test_reach_geometry_of_the_humanoid() -> None:
     left, right = np.reshape(hips, (2, 3))
     np.testing.assert_allclose(left, HIPS[0], atol=0.005)
     np.testing.assert_allclose(right, HIPS[1], atol=0.005)
-    config = robot_kd_config(KDWalkConfig(keep_feet_in_reach=True), load_robot("humanoid3d"))
+    config = robot_kd_config(KDWalkConfig(), load_robot("humanoid3d"))  # on by default
     assert config.leg_reach_m == pytest.approx(0.44)
-    assert robot_kd_config(KDWalkConfig(), load_robot("humanoid3d")).leg_reach_m is None
+    off = robot_kd_config(KDWalkConfig(keep_feet_in_reach=False), load_robot("humanoid3d"))
+    assert off.leg_reach_m is None
 
 
 def test_the_planar_biped_has_no_reach_rows() -> None:
-    with pytest.raises(ConfigError, match="keep_feet_in_reach"):
-        robot_kd_config(KDWalkConfig(keep_feet_in_reach=True), load_robot("biped2d"))
+    assert robot_kd_config(KDWalkConfig(), load_robot("biped2d")).leg_reach_m is None
 
 
 def _far_step(sub: KDSubproblem, n_iterations: int) -> tuple[np.ndarray, np.ndarray]:

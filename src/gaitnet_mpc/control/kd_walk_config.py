@@ -244,10 +244,11 @@ class KDWalkConfig:
     # (KDConfig.min_foot_separation_m = RobotModel.min_foot_separation_m) and swing targets
     # held on the swing foot's own side of the stance foot. False: the paper's QP.
     keep_feet_apart: bool = True
-    # Keep each planned stance foot within its leg's length of the hip (beyond the paper):
-    # reach rows in the QP (mpc/kinematic_rows.py; KDConfig.leg_reach_m and hip_offset_m from the
-    # robot). False: no such rows, as the paper.
-    keep_feet_in_reach: bool = False
+    # Keep each planned touchdown within its leg's reach of the hip (beyond the paper; row 26
+    # of docs/deviations.md): reach rows in the QP (mpc/kinematic_rows.py; KDConfig.leg_reach_m,
+    # hip_offset_m and reach_tilt_rad from the robot; docs/design/leg_reach.md). A planar
+    # robot's 2-DoF legs get none. False: no such rows, as the paper.
+    keep_feet_in_reach: bool = True
     # Fraction of the foot's toe and heel distances the MPC may move the centre of pressure
     # to (the wrench rows of mpc/contact.py; 1: the whole foot, as the paper). At the toe
     # or heel the box foot tips onto one edge, loses its yaw friction and spins (2 pivots
@@ -300,9 +301,7 @@ class KDWalkConfig:
 def robot_kd_config(config: KDWalkConfig, robot: RobotModel) -> KDConfig:
     """``config.sequential.kd`` with the :data:`ROBOT_FIELDS` taken from ``robot``."""
     kd = config.sequential.kd
-    if config.keep_feet_in_reach:
-        if robot.spec.planar:
-            raise ConfigError("keep_feet_in_reach", True, "False for a planar robot")
+    if config.keep_feet_in_reach and not robot.spec.planar:
         hips, leg_m, tilt_rad = reach_geometry(robot)
         kd = replace(kd, hip_offset_m=hips, leg_reach_m=leg_m, reach_tilt_rad=tilt_rad)
     return replace(

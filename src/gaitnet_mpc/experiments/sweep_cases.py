@@ -13,8 +13,9 @@ Modes (:data:`MODES`), humanoid3d throughout:
   on the force (:func:`bisect_largest`). The push starts at phase ``p`` of the controller's
   own step: the first one at or after the settling time with the left foot in the air
   (:mod:`~gaitnet_mpc.experiments.push_timing`; sweeps made before 2026-12-07 used a
-  nominal step grid). Survived: no fall within the time after the push. The episodes of one bisection are the same up to the push, so that
-  part is simulated once and each force finishes in a forked copy of the process
+  nominal step grid). Survived: no fall within the time after the push. The episodes of
+  one bisection are the same up to the push, so that part is simulated once and each
+  force finishes in a forked copy of the process
   (:mod:`~gaitnet_mpc.experiments.forked_episode`; the same records, 2-3x less time).
 * ``protocol``: one episode per controller x seed under the data-collection protocol's
   pushes (:func:`~gaitnet_mpc.sim.disturbances.protocol_pushes`).
