@@ -22,8 +22,9 @@ from gaitnet_mpc.mpc.sequential import SequentialConfig
 
 def _paper_walk_config(planar: bool) -> KDWalkConfig:
     """``kd --preset paper`` written out: Table VIII (planar: Table V) read per unit of
-    motion, Table X, H_ref by eq. 30, no disturbance observer and (humanoid) the net taught
-    by this preset's ``kd``, over the default preset (its robot-level rows and low level)."""
+    motion, Table X, H_ref by eq. 30, no disturbance observer, no reach rows and (humanoid)
+    the net taught by this preset's ``kd``, over the default preset (its other robot-level
+    rows and low level)."""
     default = _default_walk_config(planar)
     if planar:
         kd = KDConfig(
@@ -42,6 +43,7 @@ def _paper_walk_config(planar: bool) -> KDWalkConfig:
         sequential=SequentialConfig(kd=kd, reference_pose="eq30"),
         dt_policy=DtPolicyConfig(gaitnet_weights=net),
         disturbance_observer=None,
+        keep_feet_in_reach=False,
     )
 
 
