@@ -197,7 +197,9 @@ def test_quick_push_sweep_end_to_end_and_resume(
             )
     status = json.loads((out / "status.json").read_text())
     assert status["state"] == "done" and len(status["done"]) == 2 and status["todo"] == []
-    assert "gaitnet-mpc sweep push" in (out / "sweep.md").read_text()
+    report = (out / "sweep.md").read_text()
+    assert "gaitnet-mpc sweep push" in report
+    assert "Phase: where in the controller's own executed step" in report  # the rule used
 
     # the same command again: no new work, the same cases
     assert main(argv) == 0

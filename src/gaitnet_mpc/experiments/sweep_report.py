@@ -176,8 +176,7 @@ LEGENDS = {
     "push": f"Cells: the largest force [N] of a {PUSH_DURATION_S:g} s push at the trunk CoM "
     "(impulse 0.2 F [N s]) survived without a fall until the episode ends, by bisection on "
     "the force grid; `>= F`: the top of the range was survived; `(!F)`: a spot check below "
-    "the bound fell at F (non-monotone); `falls unpushed`: the unpushed run fell. Phase: "
-    "where in the nominal step (5 dt) the push starts, after the settling time.",
+    "the bound fell at F (non-monotone); `falls unpushed`: the unpushed run fell.",
     "payload": "Cells: the largest unknown trunk payload [kg] walked for the whole episode "
     "without a fall, by bisection; `>= m`: the top of the range was walked; `(!m)`: a spot "
     "check below the bound fell (non-monotone).",
@@ -188,6 +187,22 @@ LEGENDS = {
     "the seeds; `uneven:A`: tiles with tops uniform in [-A, A] m (a course file in "
     "`courses/`), `stepping-stones`: its seeded layouts.",
 }
+
+
+#: What a push's phase means under each rule of ``SweepPlan.phase_of``.
+PHASE_LEGENDS = {
+    "nominal": "where in the nominal step (5 dt) the push starts, after the settling time",
+    "executed": "where in the controller's own executed step the push starts: the first "
+    "step that starts after the settling time with the left foot in the air",
+}
+
+
+def _phase_legend(mode: str, settings: dict[str, Any]) -> str:
+    """The push legend's last sentence: what the phase column means in this sweep."""
+    if mode != "push":
+        return ""
+    rule = settings["plan"].get("phase_of", "nominal")
+    return f" Phase: {PHASE_LEGENDS[rule]}."
 
 
 def markdown(
@@ -225,7 +240,7 @@ def markdown(
         "",
         *tables,
         "",
-        LEGENDS[mode],
+        LEGENDS[mode] + _phase_legend(mode, settings),
         "",
         "Settings: humanoid3d, flat unless named, "
         + ", ".join(f"{k} {v}" for k, v in settings["plan"].items() if v not in ([], 0.0))
