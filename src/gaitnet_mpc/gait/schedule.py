@@ -222,6 +222,22 @@ class GaitSchedule:
             )
         self._step_dt_s = dt
 
+    def retime_step(self, dt_s: float) -> None:
+        """Change the dt of the step under way to ``dt_s`` [s] (beyond the paper's Remark 4,
+        :mod:`~gaitnet_mpc.control.step_retiming`): the step keeps its start time and ends
+        at ``start + h' dt_s``; its remaining stages take ``dt_s``.
+
+        ``dt_s`` outside ``dt_bounds_s``, or one whose step would end at or before the
+        current time, raises :class:`ConfigError`.
+        """
+        dt = self._check_dt(dt_s, "dt_s")
+        end = self._step_start_s + self.config.stages_per_step * dt
+        if end <= self._t_s + TIME_EPS_S:
+            raise ConfigError(
+                "dt_s", dt_s, f"a dt whose step ends after the current time {self._t_s!r} s"
+            )
+        self._step_dt_s = dt
+
     def set_next_step_dt(self, dt_s: float | None) -> None:
         """Fill the policy slot: the dt [s] that every later step starts with.
 

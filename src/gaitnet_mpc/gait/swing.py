@@ -436,6 +436,17 @@ class SwingTrajectory:
         self._apply(t, p, v, a)
         return True
 
+    def retime(self, duration_s: float, t_now_s: float) -> None:
+        """Make the swing last ``duration_s`` [s] from lift-off, re-planning it from time
+        ``t_now_s`` [s] on to the same target (position, velocity and acceleration stay
+        continuous at ``t_now_s``, as in :meth:`retarget`). ``duration_s`` must exceed
+        ``t_now_s``."""
+        t = _scalar(t_now_s, "t_now_s", 0.0, "a time >= 0 s")
+        T = _scalar(duration_s, "duration_s", t, f"a duration > t_now_s = {t!r} s", strict=True)
+        p, v, a = (self._eval(min(t, self._T), d) for d in range(3))  # each (3,)
+        self._T = T
+        self._apply(t, p, v, a)
+
     def __repr__(self) -> str:
         return (
             f"SwingTrajectory(p0={self._p0.tolist()}, p1={self._p1.tolist()}, "

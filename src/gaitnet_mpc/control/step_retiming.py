@@ -1,0 +1,185 @@
+"""Re-timing the step under way (beyond the paper; issue 48, item 3).
+
+The paper sets a step's dt once, at its start (Remark 4). A push in mid-swing then cannot
+shorten the step under way, and until the next step start a variable and a fixed frequency
+react alike. With :class:`StepRetimingConfig` set, each replan within a step may shorten
+the rest of the step, by the capture-point rule below. A fixed-frequency controller keeps
+its timing (the option is off by default), so that comparisons stay fair.
+
+The rule. The linear inverted pendulum about the stance foot ``p_s`` (``omega = sqrt(g /
+z)``, ``z`` the CoM's height above the stance foot) predicts, ``tau`` from now, the CoM and
+its divergent component of motion (the capture point) ``xi = c + v / omega``:
+
+    c(tau)  = p_s + (c_0 - p_s) cosh(omega tau) + (v_0 / omega) sinh(omega tau)
+    xi(tau) = p_s + (xi_0 - p_s) exp(omega tau)
+
+The foothold from which a periodic LIP gait walks on at the commanded speed ``v`` along
+the heading is ``p*(tau) = xi(tau) - b e_x``, with the gait's offset ``b = v T / (exp(omega
+T) - 1)`` (``T`` the step's duration; from ``xi`` at a step's end being ``b`` past the next
+foot, ``xi_end = p + b exp(omega T)`` and ``xi_end = p + v T + b``). Sideways the offset is
+taken as 0: the default lateral reference plans the feet 2-7 cm apart.
+
+``p*`` is in reach when it lies in the horizontal section, at the standing hip height, of
+the QP's reach pyramid (:mod:`~gaitnet_mpc.mpc.kinematic_rows`): within ``l sin(alpha)``
+(humanoid3d: 0.15 m) of the swing leg's hip at ``c(tau)`` along the heading and across it.
+If the step's present end keeps ``p*`` in reach, nothing changes. Otherwise the step is
+shortened to the longest duration ``5 dt`` (``dt`` on a grid from ``min_dt_s`` up) whose
+``p*`` is in reach. When no duration puts it in reach, nothing changes either: the
+pendulum, which has no ankle torque and no angular momentum, then says that no timing
+recovers, while the MPC may still brake through the stance foot's centre of pressure and
+the trunk. Taking the shortest step there instead made forward pushes worse (a 75 N push
+at 0.25 m/s, tuning seed 312: six 0.15 s steps, each too short to catch up, and a fall,
+where the unchanged controller took one 0.325 s step and walked on). The rule only
+shortens: a step made longer after a push is what Gait-Net's own answers already do wrong
+(``docs/design/gaitnet_recovery.md``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gaitnet_mpc.config import bounded, check_ranges
+from gaitnet_mpc.dt_policy import ACCEPTED_DT_INTERVAL, ACCEPTED_DT_RANGE_S
+from gaitnet_mpc.geometry import heading_axes
+
+GRAVITY_MPS2 = 9.81
+
+
+@dataclass(frozen=True)
+class StepRetimingConfig:
+    """Settings of the capture-point re-timing of the step under way (module docstring)."""
+
+    # The shortest dt a re-timed step takes [s]: 5 x 0.03 = 0.15 s, the lower end of the
+    # dts this project accepts (ACCEPTED_DT_RANGE_S). Set, not tuned.
+    min_dt_s: float = bounded(
+        ACCEPTED_DT_RANGE_S[0], ACCEPTED_DT_INTERVAL, "a sampling time", "the accepted dts"
+    )
+    # The candidate dts' spacing [s].
+    grid_dt_s: float = bounded(0.0025, "(0, 0.01] s", "a spacing", "a tenth of the dt range")
+    # The least swing time left after a re-timing [s]: the foot still has to reach its
+    # foothold (0.1 m in 0.04 s is 2.5 m/s). Set, not tuned.
+    min_remaining_s: float = bounded(0.04, "(0, 0.2] s", "a duration", "a fifth of a step")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+
+
+@dataclass(frozen=True)
+class RetimeDecision:
+    """A shortened step: its new dt [s] and what the rule saw (for ``swing_events``)."""
+
+    dt_s: float
+    dt_before_s: float
+    time_in_step_s: float
+    excess_before_m: float
+    excess_after_m: float
+
+    def to_dict(self, t_s: float, foot: str) -> dict[str, Any]:
+        return {
+            "kind": "retime",
+            "t_s": round(t_s, 4),
+            "foot": foot,
+            "dt_before_s": round(self.dt_before_s, 4),
+            "dt_s": round(self.dt_s, 4),
+            "time_in_step_s": round(self.time_in_step_s, 4),
+            "excess_before_m": round(self.excess_before_m, 4),
+            "excess_after_m": round(self.excess_after_m, 4),
+        }
+
+
+def reach_excess_m(
+    tau_s: np.ndarray,
+    com_xy_m: np.ndarray,
+    com_vel_xy_mps: np.ndarray,
+    stance_xy_m: np.ndarray,
+    omega_radps: float,
+    heading_rad: float,
+    hip_offset_xy_m: np.ndarray,
+    offset_b_m: float,
+    reach_m: float,
+) -> np.ndarray:
+    """(n,) how far ``p*(tau)`` lies outside the swing hip's reach square, for each of the
+    ``n`` times ``tau_s`` [m] (<= 0: in reach; module docstring)."""
+    ch, sh, ex = (
+        np.cosh(omega_radps * tau_s),
+        np.sinh(omega_radps * tau_s),
+        np.exp(omega_radps * tau_s),
+    )
+    rel = com_xy_m - stance_xy_m
+    c = stance_xy_m + rel * ch[:, None] + (com_vel_xy_mps / omega_radps) * sh[:, None]
+    xi = stance_xy_m + (rel + com_vel_xy_mps / omega_radps) * ex[:, None]
+    e_x, e_y = heading_axes(heading_rad)
+    hip = c + hip_offset_xy_m[0] * e_x + hip_offset_xy_m[1] * e_y
+    d = xi - offset_b_m * e_x - hip  # (n, 2)
+    along, across = d @ e_x, d @ e_y
+    return np.maximum(np.abs(along), np.abs(across)) - reach_m
+
+
+def retime_step(
+    config: StepRetimingConfig,
+    *,
+    dt_s: float,
+    max_dt_s: float,
+    time_in_step_s: float,
+    com_m: np.ndarray,
+    com_vel_mps: np.ndarray,
+    stance_m: np.ndarray,
+    heading_rad: float,
+    hip_offset_xy_m: np.ndarray,
+    reach_m: float,
+    speed_cmd_mps: float,
+    stages_per_step: int = 5,
+) -> RetimeDecision | None:
+    """The rule of the module docstring at one replan; None: keep the step's end.
+
+    ``dt_s``: the step's dt now; ``max_dt_s``: the longest dt it may take (its dt
+    bounds); ``com_m``, ``com_vel_mps``, ``stance_m``: measured CoM, its velocity and the
+    stance foot (world, each (3,)); ``hip_offset_xy_m``: (2,) the swing leg's hip from the
+    CoM in the heading frame; ``reach_m``: the reach square's half-width [m];
+    ``speed_cmd_mps``: the commanded speed along the heading.
+    """
+    z = float(com_m[2] - stance_m[2])
+    if z <= 0.05:  # not a pendulum
+        return None
+    omega = math.sqrt(GRAVITY_MPS2 / z)
+    n = stages_per_step
+    hi = min(dt_s, max_dt_s)
+    dts = np.arange(config.min_dt_s, hi + 1e-12, config.grid_dt_s)
+    dts = np.append(dts[dts < dt_s - 1e-9], dt_s)  # candidates, the step's own dt last
+    tau = n * dts - time_in_step_s
+    keep = tau >= config.min_remaining_s
+    keep[-1] = True
+    dts, tau = dts[keep], np.maximum(tau[keep], 0.0)
+    period = n * dt_s
+    b = speed_cmd_mps * period / math.expm1(omega * period)
+    excess = reach_excess_m(
+        tau,
+        np.asarray(com_m[:2], dtype=float),
+        np.asarray(com_vel_mps[:2], dtype=float),
+        np.asarray(stance_m[:2], dtype=float),
+        omega,
+        heading_rad,
+        hip_offset_xy_m,
+        b,
+        reach_m,
+    )
+    if excess[-1] <= 0.0:
+        return None
+    ok = np.flatnonzero(excess <= 0.0)
+    if not ok.size:
+        return None
+    i = int(ok[-1])
+    return RetimeDecision(
+        dt_s=float(dts[i]),
+        dt_before_s=dt_s,
+        time_in_step_s=time_in_step_s,
+        excess_before_m=float(excess[-1]),
+        excess_after_m=float(excess[i]),
+    )
+
+
+__all__ = ["RetimeDecision", "StepRetimingConfig", "reach_excess_m", "retime_step"]
