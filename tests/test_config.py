@@ -12,7 +12,7 @@ from gaitnet_mpc.config import apply, dumps, load_preset, parse_overrides, prese
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, preview_walk_config
 from gaitnet_mpc.control.registry import controller_config
 from gaitnet_mpc.control.srbm_walk import SRBMWalkConfig
-from gaitnet_mpc.dt_policy import DtPolicyConfig
+from gaitnet_mpc.dt_policy import DtPolicyConfig, GaitNetPolicyConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait.preview import PreviewConfig
 from gaitnet_mpc.mpc.contact import ContactParams
@@ -22,9 +22,9 @@ from gaitnet_mpc.mpc.sequential import SequentialConfig
 
 def _paper_walk_config(planar: bool) -> KDWalkConfig:
     """``kd --preset paper`` written out: Table VIII (planar: Table V) read per unit of
-    motion, Table X, H_ref by eq. 30, no disturbance observer, no reach rows and (humanoid)
-    the net taught by this preset's ``kd``, over the default preset (its other robot-level
-    rows and low level)."""
+    motion, Table X, H_ref by eq. 30, no disturbance observer, no reach rows, no step
+    re-timing under way and (humanoid) the net taught by this preset's ``kd``, over the
+    default preset (its other robot-level rows and low level)."""
     default = _default_walk_config(planar)
     if planar:
         kd = KDConfig(
@@ -41,7 +41,9 @@ def _paper_walk_config(planar: bool) -> KDWalkConfig:
     return replace(
         default,
         sequential=SequentialConfig(kd=kd, reference_pose="eq30"),
-        dt_policy=DtPolicyConfig(gaitnet_weights=net),
+        dt_policy=DtPolicyConfig(
+            gaitnet_weights=net, gaitnet=GaitNetPolicyConfig(retime_steps=None)
+        ),
         disturbance_observer=None,
         keep_feet_in_reach=False,
     )

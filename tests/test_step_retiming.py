@@ -12,12 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from gaitnet_mpc.control.step_retiming import (
-    GRAVITY_MPS2,
-    StepRetimingConfig,
-    reach_excess_m,
-    retime_step,
-)
+from gaitnet_mpc.control.registry import controller_config
+from gaitnet_mpc.control.step_retiming import GRAVITY_MPS2, reach_excess_m, retime_step
+from gaitnet_mpc.dt_policy import StepRetimingConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, SwingConfig
 from gaitnet_mpc.runner.loop import EpisodeLoop
@@ -98,6 +95,7 @@ def test_the_schedule_ends_a_retimed_step_earlier() -> None:
         sched.retime_step(0.02)  # below the bounds
     sched.advance_to(0.151)
     assert sched.step_index == 1 and sched.step_log[0].duration_s == pytest.approx(0.15)
+    assert sched.step_log[0].planned_duration_s == pytest.approx(0.25)  # as it started
     sched.advance_to(0.151 + 0.2)  # 0.2 s into a step of 5 x 0.045 s
     with pytest.raises(ConfigError, match="ends after the current time"):
         sched.retime_step(0.035)  # it would have ended 0.025 s ago
@@ -119,14 +117,9 @@ def test_a_retimed_swing_is_continuous_and_lands_at_its_new_end(t_now: float) ->
         tr.retime(t_now, t_now)
 
 
-def _walk(seconds: float, pushes: tuple[Push, ...]) -> EpisodeLoop:
+def _walk(seconds: float, pushes: tuple[Push, ...], controller: str = "gaitnet") -> EpisodeLoop:
     scenario = make_scenario(
-        controller="gaitnet",
-        course="flat",
-        vx_mps=0.5,
-        duration_s=seconds,
-        pushes=pushes,
-        overrides=("retime_steps.min_dt_s=0.03",),
+        controller=controller, course="flat", vx_mps=0.5, duration_s=seconds, pushes=pushes
     )
     episode = build_episode(scenario)
     loop = EpisodeLoop(episode.sim, episode.controller, episode.command, seconds)
@@ -135,15 +128,30 @@ def _walk(seconds: float, pushes: tuple[Push, ...]) -> EpisodeLoop:
     return loop
 
 
+PUSH_LEFT = (Push(2.2, (0.0, 70.0, 0.0), 0.2),)
+
+
+def _retimes(loop: EpisodeLoop) -> list[dict]:
+    return [e for e in loop.controller.swing_events if e["kind"] == "retime"]
+
+
 def test_in_the_loop_only_a_push_retimes_and_each_retiming_is_logged() -> None:
     calm = _walk(3.0, ())
     assert not calm.fell
-    assert not [e for e in calm.controller.swing_events if e["kind"] == "retime"]
+    assert not _retimes(calm)
 
-    pushed = _walk(3.0, (Push(2.2, (0.0, 70.0, 0.0), 0.2),))
-    events = [e for e in pushed.controller.swing_events if e["kind"] == "retime"]
+    pushed = _walk(3.0, PUSH_LEFT)
+    events = _retimes(pushed)
     assert events and all(e["t_s"] >= 2.2 for e in events)
     assert all(0.03 <= e["dt_s"] < e["dt_before_s"] for e in events)
     # the executed step durations are the shortened ones
     durations = pushed.controller.step_durations_s
     assert min(durations) < 5 * 0.045 - 1e-9
+
+
+def test_a_fixed_frequency_and_the_paper_preset_keep_their_timing() -> None:
+    kd = _walk(2.6, PUSH_LEFT, controller="kd")
+    assert not _retimes(kd)
+    assert set(kd.controller.step_durations_s) == {5 * 0.045}
+    paper = controller_config("gaitnet", preset="paper", planar=False)
+    assert paper.dt_policy.gaitnet.retime_steps is None

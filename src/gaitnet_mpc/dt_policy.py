@@ -90,6 +90,26 @@ def oracle_grid_s(
 
 
 @dataclass(frozen=True)
+class StepRetimingConfig:
+    """Settings of the capture-point re-timing of the step under way
+    (:mod:`~gaitnet_mpc.control.step_retiming`, beyond the paper's Remark 4)."""
+
+    # The shortest dt a re-timed step takes [s]: 5 x 0.03 = 0.15 s, the lower end of the
+    # dts this project accepts (ACCEPTED_DT_RANGE_S). Set, not tuned.
+    min_dt_s: float = bounded(
+        ACCEPTED_DT_RANGE_S[0], ACCEPTED_DT_INTERVAL, "a sampling time", "the accepted dts"
+    )
+    # The candidate dts' spacing [s].
+    grid_dt_s: float = bounded(0.0025, "(0, 0.01] s", "a spacing", "a tenth of the dt range")
+    # The least swing time left after a re-timing [s]: the foot still has to reach its
+    # foothold (0.1 m in 0.04 s is 2.5 m/s). Set, not tuned.
+    min_remaining_s: float = bounded(0.04, "(0, 0.2] s", "a duration", "a fifth of a step")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+
+
+@dataclass(frozen=True)
 class GaitNetPolicyConfig:
     """Safeguards of the Gait-Net dt policy (:class:`~gaitnet_mpc.gaitnet.policy.GaitNetDt`;
     paper Sec. VI names the failure they guard against: dts that do not settle).
@@ -106,6 +126,10 @@ class GaitNetPolicyConfig:
         mirror_symmetric: each member's dt is the mean of its dts of the step start and
             of its left-right mirror image, so that mirror-image step starts get the same
             dt (docs/design/gaitnet_symmetry.md).
+        retime_steps: at each replan within a step, a capture-point rule may shorten the
+            rest of the step (beyond the paper's Remark 4; docs/design/step_retiming.md).
+            Only ``gaitnet`` re-times: a fixed frequency keeps its timing. None: a step
+            keeps the dt chosen at its start (the ``paper`` preset).
     """
 
     max_spread_s: float = bounded(0.006, "(0, 0.2] s", "a spread", "0.2 s spans every dt")
@@ -116,6 +140,7 @@ class GaitNetPolicyConfig:
     safeguards: bool = True
     max_retimes: int | None = bounded(2, "[1, 100]", "an integer", "None: no limit")
     mirror_symmetric: bool = False
+    retime_steps: StepRetimingConfig | None = field(default_factory=StepRetimingConfig)
 
     def __post_init__(self) -> None:
         check_ranges(self)

@@ -15,7 +15,6 @@ touchdown and the CoM path (:mod:`gaitnet_mpc.gait.preview`, beyond the paper).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import replace
 from functools import cached_property
@@ -29,7 +28,7 @@ from gaitnet_mpc.control.blind_touchdown import TouchdownSearch
 from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, robot_kd_config
-from gaitnet_mpc.control.step_retiming import retime_step
+from gaitnet_mpc.control.step_retiming import StepRetimer
 from gaitnet_mpc.control.swing_obstacles import SwingObstacles
 from gaitnet_mpc.control.terrain_view import TerrainView
 from gaitnet_mpc.control.walking import swing_beside_stance
@@ -44,7 +43,6 @@ from gaitnet_mpc.geometry import heading_axes
 from gaitnet_mpc.kinematics.reference import ReferenceTiming
 from gaitnet_mpc.mpc.dt_nlp import NLPDt
 from gaitnet_mpc.mpc.dt_oracle import OracleDt
-from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
 from gaitnet_mpc.mpc.sequential import (
     CoMReference,
     DtPolicy,
@@ -97,10 +95,10 @@ class KDWalkController(WalkingBase):
         self.name = CONTROLLER_OF_POLICY[self.config.dt_policy.kind]
         self.dt_policy = dt_policy
         self.mpc = SequentialKDMPC(robot, sequential, dt_policy)
+        self.retimer = StepRetimer.of(self.config.dt_policy, robot)
         lo, hi = self.config.sequential.dt_bounds_s
-        retiming = self.config.retime_steps
-        if retiming is not None:  # a re-timed step may go below the policy's bounds
-            lo = min(lo, retiming.min_dt_s)
+        if self.retimer is not None:  # a re-timed step may go below the policy's bounds
+            lo = min(lo, self.retimer.config.min_dt_s)
         schedule = GaitScheduleConfig(
             default_dt_s=self.mpc.dt_policy.nominal_dt_s, dt_bounds_s=(lo, hi)
         )
@@ -110,14 +108,6 @@ class KDWalkController(WalkingBase):
         self.raibert = _kd_raibert(robot.spec.planar)
         self.search = TouchdownSearch() if self.config.blind else None
         self.obstacles = SwingObstacles(robot, terrain, self.config)
-        self._retime_events: list[dict[str, Any]] = []
-        self._hips_xy: dict[str, np.ndarray] = {}
-        if retiming is not None:
-            if robot.spec.planar:
-                raise ConfigError("retime_steps", retiming, "None for a planar robot")
-            hips, leg_m, tilt_rad = reach_geometry(robot)
-            self._hips_xy = {f: np.array(hips[3 * i : 3 * i + 2]) for i, f in enumerate(FEET)}
-            self._reach_m = leg_m * math.sin(tilt_rad)
 
     # ---------------------------------------------------------------- episode
     def reset(self, state: RobotState) -> None:
@@ -130,7 +120,8 @@ class KDWalkController(WalkingBase):
         self.preview: PreviewPlan | None = None
         self._preview_t0_s = 0.0
         self.obstacles.reset(state)
-        self._retime_events = []
+        if self.retimer is not None:
+            self.retimer.events.clear()
         observer = self.config.disturbance_observer  # starts from this state
         self.observer = None if observer is None else MomentumObserver(self.robot, observer, state)
 
@@ -155,8 +146,8 @@ class KDWalkController(WalkingBase):
 
     @property
     def swing_events(self) -> list[dict[str, Any]]:
-        """The obstacle events and the steps re-timed under way (kind ``retime``)."""
-        return sorted(self.obstacles.events + self._retime_events, key=lambda e: e["t_s"])
+        retimes = self.retimer.events if self.retimer else []  # kind "retime"
+        return sorted(self.obstacles.events + retimes, key=lambda e: e["t_s"])
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
@@ -455,35 +446,6 @@ class KDWalkController(WalkingBase):
             start, target, sched.current_step_duration_s, self.obstacles.near(start, target)
         )
 
-    def _retime(self, state: RobotState) -> None:
-        """Shorten the step under way where the capture-point rule asks
-        (:mod:`~gaitnet_mpc.control.step_retiming`; ``config.retime_steps``)."""
-        cfg = self.config.retime_steps
-        if cfg is None or self.swing is None:
-            return
-        sched = self.schedule
-        swing, stance = sched.swing_foot, sched.stance_foot
-        decision = retime_step(
-            cfg,
-            dt_s=sched.current_step_dt_s,
-            max_dt_s=sched.config.dt_bounds_s[1],
-            time_in_step_s=sched.time_in_step_s,
-            com_m=state.com_world_m,
-            com_vel_mps=state.com_vel_world_mps,
-            stance_m=state.foot_pos_world_m[stance],
-            heading_rad=self.profile.heading_rad(state.t_s),
-            hip_offset_xy_m=self._hips_xy[swing],
-            reach_m=self._reach_m,
-            speed_cmd_mps=self._command_now(state.t_s).vx_mps,
-            stages_per_step=sched.config.stages_per_step,
-        )
-        if decision is None:
-            return
-        sched.retime_step(decision.dt_s)
-        self.swing.retime(sched.current_step_duration_s, sched.time_in_step_s)
-        self._steps[-1] = sched.current_step_duration_s
-        self._retime_events.append(decision.to_dict(state.t_s, swing))
-
     def _start_step(self, state: RobotState) -> None:
         sched = self.schedule
         swing = sched.swing_foot
@@ -511,7 +473,9 @@ class KDWalkController(WalkingBase):
             self._started_step = sched.step_index
             self._start_step(state)
         elif state.t_s >= self.next_replan_s:
-            self._retime(state)
+            heading, cmd = self.profile.heading_rad(state.t_s), self._command_now(state.t_s)
+            if self.retimer and self.retimer.apply(state, sched, self.swing, heading, cmd.vx_mps):
+                self._steps[-1] = sched.current_step_duration_s  # re-timed under way
             self._solve(state, full=False)
             self.next_replan_s = state.t_s + self.config.replan_period_s
         stance, swing = sched.stance_foot, sched.swing_foot

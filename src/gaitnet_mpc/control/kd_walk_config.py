@@ -11,7 +11,6 @@ from functools import partial
 from gaitnet_mpc.config import bounded, check_ranges, load_preset, preset_names
 from gaitnet_mpc.control.disturbance_observer import DisturbanceObserverConfig
 from gaitnet_mpc.control.lowlevel import LowLevelConfig
-from gaitnet_mpc.control.step_retiming import StepRetimingConfig
 from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
 from gaitnet_mpc.control.walking import (
     ACCEL_INTERVAL,
@@ -270,11 +269,6 @@ class KDWalkConfig:
     disturbance_observer: DisturbanceObserverConfig | None = field(
         default_factory=DisturbanceObserverConfig
     )
-    # Re-timing the step under way (beyond the paper's Remark 4; issue 48 item 3): at each
-    # replan within a step a capture-point rule may shorten the rest of the step, down to
-    # retime_steps.min_dt_s (control/step_retiming.py). None: a step keeps the dt chosen at
-    # its start, as the paper.
-    retime_steps: StepRetimingConfig | None = None
 
     def __post_init__(self) -> None:
         j = self.replan_j_max

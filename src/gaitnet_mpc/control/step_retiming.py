@@ -42,30 +42,14 @@ from typing import Any
 
 import numpy as np
 
-from gaitnet_mpc.config import bounded, check_ranges
-from gaitnet_mpc.dt_policy import ACCEPTED_DT_INTERVAL, ACCEPTED_DT_RANGE_S
+from gaitnet_mpc.dt_policy import DtPolicyConfig, StepRetimingConfig
+from gaitnet_mpc.gait import GaitSchedule, SwingTrajectory
 from gaitnet_mpc.geometry import heading_axes
+from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
+from gaitnet_mpc.robots import FEET, RobotModel
+from gaitnet_mpc.state import RobotState
 
 GRAVITY_MPS2 = 9.81
-
-
-@dataclass(frozen=True)
-class StepRetimingConfig:
-    """Settings of the capture-point re-timing of the step under way (module docstring)."""
-
-    # The shortest dt a re-timed step takes [s]: 5 x 0.03 = 0.15 s, the lower end of the
-    # dts this project accepts (ACCEPTED_DT_RANGE_S). Set, not tuned.
-    min_dt_s: float = bounded(
-        ACCEPTED_DT_RANGE_S[0], ACCEPTED_DT_INTERVAL, "a sampling time", "the accepted dts"
-    )
-    # The candidate dts' spacing [s].
-    grid_dt_s: float = bounded(0.0025, "(0, 0.01] s", "a spacing", "a tenth of the dt range")
-    # The least swing time left after a re-timing [s]: the foot still has to reach its
-    # foothold (0.1 m in 0.04 s is 2.5 m/s). Set, not tuned.
-    min_remaining_s: float = bounded(0.04, "(0, 0.2] s", "a duration", "a fifth of a step")
-
-    def __post_init__(self) -> None:
-        check_ranges(self)
 
 
 @dataclass(frozen=True)
@@ -182,4 +166,58 @@ def retime_step(
     )
 
 
-__all__ = ["RetimeDecision", "StepRetimingConfig", "reach_excess_m", "retime_step"]
+class StepRetimer:
+    """The rule in a controller's loop: the robot's reach geometry, and the re-timings made
+    (``events``, for ``summary.json``'s ``swing_events``)."""
+
+    def __init__(self, config: StepRetimingConfig, robot: RobotModel) -> None:
+        hips, leg_m, tilt_rad = reach_geometry(robot)
+        self.config = config
+        self.hips_xy_m = {f: np.array(hips[3 * i : 3 * i + 2]) for i, f in enumerate(FEET)}
+        self.reach_m = leg_m * math.sin(tilt_rad)
+        self.events: list[dict[str, Any]] = []
+
+    @classmethod
+    def of(cls, policy: DtPolicyConfig, robot: RobotModel) -> StepRetimer | None:
+        """The re-timer of a controller with ``policy`` on ``robot``, or None. Only
+        ``gaitnet`` re-times (a fixed frequency keeps its timing), and only a robot with a
+        3-D humanoid's legs (the planar biped has no reach geometry)."""
+        config = policy.gaitnet.retime_steps
+        if policy.kind != "gaitnet" or config is None or robot.spec.planar:
+            return None
+        return cls(config, robot)
+
+    def apply(
+        self,
+        state: RobotState,
+        schedule: GaitSchedule,
+        swing: SwingTrajectory | None,
+        heading_rad: float,
+        speed_cmd_mps: float,
+    ) -> bool:
+        """Shorten the step under way (schedule and swing) if the rule asks; True if so."""
+        if swing is None:  # no step under way yet
+            return False
+        decision = retime_step(
+            self.config,
+            dt_s=schedule.current_step_dt_s,
+            max_dt_s=schedule.config.dt_bounds_s[1],
+            time_in_step_s=schedule.time_in_step_s,
+            com_m=state.com_world_m,
+            com_vel_mps=state.com_vel_world_mps,
+            stance_m=state.foot_pos_world_m[schedule.stance_foot],
+            heading_rad=heading_rad,
+            hip_offset_xy_m=self.hips_xy_m[schedule.swing_foot],
+            reach_m=self.reach_m,
+            speed_cmd_mps=speed_cmd_mps,
+            stages_per_step=schedule.config.stages_per_step,
+        )
+        if decision is None:
+            return False
+        schedule.retime_step(decision.dt_s)
+        swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
+        self.events.append(decision.to_dict(state.t_s, schedule.swing_foot))
+        return True
+
+
+__all__ = ["RetimeDecision", "StepRetimer", "reach_excess_m", "retime_step"]

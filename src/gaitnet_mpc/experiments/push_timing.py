@@ -69,7 +69,9 @@ def executed_push_time_s(episode: Any, settle_s: float, phase: float) -> float |
 
 
 def measured_phase(controller: Any, t_s: float) -> tuple[float | None, str]:
-    """Where in its executed step the push started (phase, swing foot), from the gait log."""
+    """Where in its executed step the push started (phase, swing foot), from the gait log:
+    a fraction of the duration the step started with (a push may shorten it,
+    :mod:`~gaitnet_mpc.control.step_retiming`)."""
     from gaitnet_mpc.control.walking_base import WalkingBase
 
     if not isinstance(controller, WalkingBase):
@@ -77,9 +79,9 @@ def measured_phase(controller: Any, t_s: float) -> tuple[float | None, str]:
     sched = controller.schedule
     for s in sched.step_log:
         if s.start_time_s - 1e-9 <= t_s < s.start_time_s + s.duration_s - 1e-9:
-            return round((t_s - s.start_time_s) / s.duration_s, 3), s.swing_foot
+            return round((t_s - s.start_time_s) / s.planned_duration_s, 3), s.swing_foot
     if sched.step_start_time_s <= t_s:  # the episode ended inside that step
-        frac = (t_s - sched.step_start_time_s) / sched.current_step_duration_s
+        frac = (t_s - sched.step_start_time_s) / sched.planned_step_duration_s
         return round(frac, 3), sched.swing_foot
     return None, ""
 

@@ -100,13 +100,15 @@ class GaitScheduleConfig:
 
 @dataclass(frozen=True)
 class StepRecord:
-    """One executed footstep: index, swing foot, start time [s], dt [s], duration [s]."""
+    """One executed footstep: index, swing foot, start time [s], dt [s], duration [s], and
+    the duration it started with [s] (longer when it was re-timed under way)."""
 
     index: int
     swing_foot: str
     start_time_s: float
     dt_s: float
     duration_s: float
+    planned_duration_s: float
 
 
 @dataclass(frozen=True)
@@ -167,7 +169,7 @@ class GaitSchedule:
         self._step_index = 0
         self._step_start_s = float(start_time_s)
         self._policy_dt_s = None
-        self._step_dt_s = self.config.default_dt_s
+        self._step_dt_s = self._start_dt_s = self.config.default_dt_s
         self._at_step_start = True
         self._log: list[StepRecord] = []
 
@@ -194,11 +196,12 @@ class GaitSchedule:
                     start_time_s=self._step_start_s,
                     dt_s=self._step_dt_s,
                     duration_s=self.current_step_duration_s,
+                    planned_duration_s=self.planned_step_duration_s,
                 )
             )
             self._step_start_s = self.step_end_time_s
             self._step_index += 1
-            self._step_dt_s = self.next_step_dt_s
+            self._step_dt_s = self._start_dt_s = self.next_step_dt_s
             started += 1
         self._t_s = t
         self._at_step_start = started > 0
@@ -220,7 +223,7 @@ class GaitSchedule:
                 f"under way at t = {self._t_s!r} s; its dt can only be set at the step start "
                 "(when at_step_start is True); use set_next_step_dt for later steps"
             )
-        self._step_dt_s = dt
+        self._step_dt_s = self._start_dt_s = dt
 
     def retime_step(self, dt_s: float) -> None:
         """Change the dt of the step under way to ``dt_s`` [s] (beyond the paper's Remark 4,
@@ -305,6 +308,12 @@ class GaitSchedule:
     def current_step_duration_s(self) -> float:
         """Duration of the current step, h' · dt [s] (Sec. IV-B1)."""
         return self.config.stages_per_step * self._step_dt_s
+
+    @property
+    def planned_step_duration_s(self) -> float:
+        """Duration the current step started with, h' · its dt at the start [s]: before a
+        re-timing under way (:meth:`retime_step`) it is :attr:`current_step_duration_s`."""
+        return self.config.stages_per_step * self._start_dt_s
 
     @property
     def next_step_dt_s(self) -> float:
