@@ -75,3 +75,37 @@ def test_a_touchdown_beyond_the_leg_is_pulled_within_reach(qp_form: str) -> None
     face = np.array([np.sin(0.35), 0.0, -np.cos(0.35)])  # the forward face
     assert face @ d == pytest.approx(0.44, abs=1e-6)  # binds: the foot goes as far as it may
     assert 0.1 < foot[0, 0] < 0.3  # ahead of the CoM, well short of the reference
+
+
+def test_the_compiled_rows_are_the_module_docstrings_rows() -> None:
+    """``qp_reach_rows`` (a compiled loop over the touchdowns) against the rows written out
+    with NumPy on random iterates, yaws and foot bounds."""
+    from types import SimpleNamespace
+
+    from gaitnet_mpc.mpc.kinematic_rows import qp_reach_rows
+
+    rng = np.random.default_rng(3)
+    config = KDConfig(leg_reach_m=0.44, hip_offset_m=sum(HIPS, ()), reach_tilt_rad=0.35)
+    contact = np.ones((H, 2), dtype=bool)
+    contact[:3, 1] = contact[5:8, 0] = False  # touchdowns: right at 3, left at 8
+    yaw = rng.uniform(-0.5, 0.5, (H, 2))
+    it = SimpleNamespace(p_foot=rng.normal(0, 0.2, (H, 2, 3)), p_com=rng.normal(0, 0.2, (H + 1, 3)))
+    lo = it.p_foot - rng.uniform(0, 0.3, (H, 2, 3))
+    hi = it.p_foot + rng.uniform(0, 0.3, (H, 2, 3))
+    lo[0, 0, 2] = -np.inf  # an unbounded axis
+    active, normal, bound = qp_reach_rows(
+        config, it, SimpleNamespace(contact=contact, foot_yaw_rad=yaw), lo, hi
+    )  # type: ignore[arg-type]
+    assert active.sum() == 2 and active[3, 1] and active[8, 0]
+    for k, i in zip(*np.nonzero(active), strict=True):
+        c, s = np.cos(yaw[k, i]), np.sin(yaw[k, i])
+        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        hip = rot @ np.array(HIPS[i])
+        d = it.p_foot[k, i] - it.p_com[k] - hip
+        for m, (sx, sy) in enumerate([(1, 0), (-1, 0), (0, 1), (0, -1)]):
+            n = rot @ np.array([sx * np.sin(0.35), sy * np.sin(0.35), -np.cos(0.35)])
+            np.testing.assert_allclose(normal[k, i, m], n, atol=1e-12)
+            step = np.where(n > 0, lo[k, i] - it.p_foot[k, i], hi[k, i] - it.p_foot[k, i])
+            closest = float(np.sum(np.where(n == 0, 0.0, step * n)))
+            assert bound[k, i, m] == pytest.approx(max(0.44 - n @ d, closest), abs=1e-12)
+    assert not normal[~active].any() and not bound[~active].any()

@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from gaitnet_mpc.jit import njit_cached
 from gaitnet_mpc.kinematics.leg_ik import LegGeometry, leg_geometries
 from gaitnet_mpc.mpc.kd_config import KDConfig
 from gaitnet_mpc.mpc.kd_inputs import KDInputs
@@ -104,33 +105,75 @@ def qp_reach_rows(
     ``n_m^T (delta p_f - delta p_c) <= bound`` with ``bound = l - n_m^T d^j``, or what the
     foot's bounds ``lo, hi`` (h, 2, 3) let ``n_m^T delta p_f`` reach if that is more (a
     foot boxed out of reach keeps the QP feasible). None active without
-    ``config.leg_reach_m``."""
+    ``config.leg_reach_m``. The trigonometry here, the rows in :func:`_reach_kernel`."""
     contact = a.contact
     h = contact.shape[0]
-    active = np.zeros((h, 2), dtype=bool)
-    normal = np.zeros((h, 2, 4, 3))
     if config.leg_reach_m is None:
-        return active, normal, np.zeros((h, 2, 4))
-    active[1:] = contact[1:] & ~contact[:-1]
+        return np.zeros((h, 2), dtype=bool), np.zeros((h, 2, 4, 3)), np.zeros((h, 2, 4))
     alpha = config.reach_tilt_rad
-    c, s = np.cos(a.foot_yaw_rad)[..., None], np.sin(a.foot_yaw_rad)[..., None]  # (h, 2, 1)
-    fx, fy = _FACES[:, 0] * np.sin(alpha), _FACES[:, 1] * np.sin(alpha)  # (4,)
-    normal[..., 0] = c * fx - s * fy
-    normal[..., 1] = s * fx + c * fy
-    normal[..., 2] = -np.cos(alpha)
-    normal *= active[..., None, None]
-    hips = np.reshape(np.asarray(config.hip_offset_m, dtype=float), (2, 3))
-    hip = np.empty((h, 2, 3))
-    hip[..., 0] = c[..., 0] * hips[:, 0] - s[..., 0] * hips[:, 1]
-    hip[..., 1] = s[..., 0] * hips[:, 0] + c[..., 0] * hips[:, 1]
-    hip[..., 2] = hips[:, 2]
-    d = it.p_foot - it.p_com[:h, None, :] - hip  # (h, 2, 3)
-    low, high = (lo - it.p_foot)[:, :, None, :], (hi - it.p_foot)[:, :, None, :]
-    with np.errstate(invalid="ignore"):  # 0 * inf where an axis is unbounded and n_a = 0
-        reachable = np.where(normal > 0.0, low, high) * normal
-    closest = np.sum(np.where(normal == 0.0, 0.0, reachable), axis=3)  # (h, 2, 4)
-    bound = np.maximum(config.leg_reach_m - np.einsum("kima,kia->kim", normal, d), closest)
-    return active, normal, np.where(active[..., None], bound, 0.0)
+    return _reach_kernel(
+        contact,
+        np.cos(a.foot_yaw_rad),
+        np.sin(a.foot_yaw_rad),
+        _FACES[:, 0] * np.sin(alpha),
+        _FACES[:, 1] * np.sin(alpha),
+        float(np.cos(alpha)),
+        np.reshape(np.asarray(config.hip_offset_m, dtype=float), (2, 3)),
+        float(config.leg_reach_m),
+        it.p_foot,
+        it.p_com,
+        lo,
+        hi,
+    )
+
+
+@njit_cached()
+def _reach_kernel(
+    contact: np.ndarray,
+    cos_yaw: np.ndarray,
+    sin_yaw: np.ndarray,
+    face_x: np.ndarray,
+    face_y: np.ndarray,
+    cos_alpha: float,
+    hips: np.ndarray,
+    leg_m: float,
+    p_foot: np.ndarray,
+    p_com: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`qp_reach_rows`'s rows, touchdown by touchdown (the rest stay zero)."""
+    h = contact.shape[0]
+    active = np.zeros((h, 2), dtype=np.bool_)
+    normal = np.zeros((h, 2, 4, 3))
+    bound = np.zeros((h, 2, 4))
+    d = np.empty(3)
+    for k in range(1, h):
+        for i in range(2):
+            if not (contact[k, i] and not contact[k - 1, i]):
+                continue
+            active[k, i] = True
+            c, s = cos_yaw[k, i], sin_yaw[k, i]
+            d[0] = p_foot[k, i, 0] - p_com[k, 0] - (c * hips[i, 0] - s * hips[i, 1])
+            d[1] = p_foot[k, i, 1] - p_com[k, 1] - (s * hips[i, 0] + c * hips[i, 1])
+            d[2] = p_foot[k, i, 2] - p_com[k, 2] - hips[i, 2]
+            for m in range(4):
+                normal[k, i, m, 0] = c * face_x[m] - s * face_y[m]
+                normal[k, i, m, 1] = s * face_x[m] + c * face_y[m]
+                normal[k, i, m, 2] = -cos_alpha
+                n = normal[k, i, m]
+                # the order of numpy's einsum here, so that results stay bitwise those of
+                # the vectorised form this replaced
+                dot = (n[0] * d[0] + n[2] * d[2]) + n[1] * d[1]
+                closest = 0.0
+                for ax in range(3):
+                    n_a = n[ax]
+                    if n_a > 0.0:
+                        closest += (lo[k, i, ax] - p_foot[k, i, ax]) * n_a
+                    elif n_a < 0.0:
+                        closest += (hi[k, i, ax] - p_foot[k, i, ax]) * n_a
+                bound[k, i, m] = max(leg_m - dot, closest)
+    return active, normal, bound
 
 
 __all__ = ["qp_reach_rows", "reach_geometry", "separation_rows"]
