@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from gaitnet_mpc.control.registry import controller_config
-from gaitnet_mpc.control.step_retiming import GRAVITY_MPS2, reach_excess_m, retime_step
+from gaitnet_mpc.control.step_retiming import reach_excess_m, retime_step
 from gaitnet_mpc.dt_policy import StepRetimingConfig
 from gaitnet_mpc.errors import ConfigError
 from gaitnet_mpc.gait import GaitSchedule, GaitScheduleConfig, SwingConfig
+from gaitnet_mpc.geometry import GRAVITY_MPS2
 from gaitnet_mpc.runner.loop import EpisodeLoop
 from gaitnet_mpc.scenario import build_episode, make_scenario
 from gaitnet_mpc.sim.disturbances import Push

@@ -44,12 +44,11 @@ import numpy as np
 
 from gaitnet_mpc.dt_policy import DtPolicyConfig, StepRetimingConfig
 from gaitnet_mpc.gait import GaitSchedule, SwingTrajectory
+from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.geometry import heading_axes
 from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
-
-GRAVITY_MPS2 = 9.81
 
 
 @dataclass(frozen=True)
@@ -87,7 +86,8 @@ def reach_excess_m(
     reach_m: float,
 ) -> np.ndarray:
     """(n,) how far ``p*(tau)`` lies outside the swing hip's reach square, for each of the
-    ``n`` times ``tau_s`` [m] (<= 0: in reach; module docstring)."""
+    ``n`` times ``tau_s`` [m] (<= 0: in reach; module docstring). The pendulum of
+    :func:`~gaitnet_mpc.gait.lip.lip_propagate`, for many times at once."""
     ch, sh, ex = (
         np.cosh(omega_radps * tau_s),
         np.sinh(omega_radps * tau_s),
@@ -129,7 +129,7 @@ def retime_step(
     z = float(com_m[2] - stance_m[2])
     if z <= 0.05:  # not a pendulum
         return None
-    omega = math.sqrt(GRAVITY_MPS2 / z)
+    omega = lip_frequency(z)
     n = stages_per_step
     hi = min(dt_s, max_dt_s)
     dts = np.arange(config.min_dt_s, hi + 1e-12, config.grid_dt_s)
