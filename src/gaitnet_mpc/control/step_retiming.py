@@ -2,9 +2,10 @@
 
 The paper sets a step's dt once, at its start (Remark 4). A push in mid-swing then cannot
 shorten the step under way, and until the next step start a variable and a fixed frequency
-react alike. With :class:`StepRetimingConfig` set, each replan within a step may shorten
-the rest of the step, by the capture-point rule below. A fixed-frequency controller keeps
-its timing (the option is off by default), so that comparisons stay fair.
+react alike. With ``dt_policy.gaitnet.retime_steps`` set (:class:`StepRetimingConfig`; on
+by default, off under ``--preset paper``), each replan within a step of ``gaitnet`` may
+shorten the rest of the step, by the capture-point rule below. A fixed-frequency
+controller (``kd``) keeps its timing, so that comparisons stay fair.
 
 The rule. The linear inverted pendulum about the stance foot ``p_s`` (``omega = sqrt(g /
 z)``, ``z`` the CoM's height above the stance foot) predicts, ``tau`` from now, the CoM and
