@@ -289,6 +289,25 @@ def test_policy_falls_back_on_a_wide_spread(_step_start):
     assert bare.summary()["fallbacks"]["spread"] == 0
 
 
+def test_spread_fallback_keeps_the_dt_the_previous_step_ran_with(_step_start):
+    """A step re-timed under way ran with its new dt; the next step's spread fallback keeps
+    that one (clipped into the bounds), not the dt first chosen for it."""
+    from gaitnet_mpc.gaitnet.policy import GaitNetDt
+
+    net = _DriftingNet(step_s=0.0)
+    net.dt_s = 0.065
+    policy = GaitNetDt(net, planar=False)  # type: ignore[arg-type]
+    assert _ask(policy, _step_start(), 2) == pytest.approx([0.065] * 2)
+    policy.step_retimed(0.05)  # the step under way now ends as a 5 x 0.05 s step
+    net.spread_s = 0.02  # the next step start lies outside the data
+    assert _ask(policy, _step_start(), 2) == pytest.approx([0.05] * 2)
+    policy.step_retimed(0.03)  # below the policy's bounds
+    assert _ask(policy, _step_start(), 1) == pytest.approx([0.045])  # clipped
+    steps = policy.summary()["steps"]
+    assert [s["retimed_dt_s"] for s in steps] == [0.05, 0.03, None]
+    assert [s["fallback"] for s in steps] == [None, "spread", "spread"]
+
+
 @pytest.mark.slow
 def test_oracle_keeps_the_converged_plan_of_lowest_cost(biped):
     """The grid-search oracle on the biped: every step start tried the whole grid of the

@@ -95,7 +95,8 @@ class KDWalkController(WalkingBase):
         self.name = CONTROLLER_OF_POLICY[self.config.dt_policy.kind]
         self.dt_policy = dt_policy
         self.mpc = SequentialKDMPC(robot, sequential, dt_policy)
-        self.retimer = StepRetimer.of(self.config.dt_policy, robot)
+        on_retime = getattr(dt_policy, "step_retimed", None)  # Gait-Net's fallback reads it
+        self.retimer = StepRetimer.of(self.config.dt_policy, robot, on_retime)
         lo, hi = self.config.sequential.dt_bounds_s
         if self.retimer is not None:  # a re-timed step may go below the policy's bounds
             lo = min(lo, self.retimer.config.min_dt_s)

@@ -38,6 +38,7 @@ shortens: a step made longer after a push is what Gait-Net's own answers already
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,24 +170,36 @@ def retime_step(
 
 class StepRetimer:
     """The rule in a controller's loop: the robot's reach geometry, and the re-timings made
-    (``events``, for ``summary.json``'s ``swing_events``)."""
+    (``events``, for ``summary.json``'s ``swing_events``). ``on_retime`` is told each new
+    dt [s] (the dt policy, whose fallback keeps the previous step's executed dt)."""
 
-    def __init__(self, config: StepRetimingConfig, robot: RobotModel) -> None:
+    def __init__(
+        self,
+        config: StepRetimingConfig,
+        robot: RobotModel,
+        on_retime: Callable[[float], None] | None = None,
+    ) -> None:
         hips, leg_m, tilt_rad = reach_geometry(robot)
         self.config = config
+        self.on_retime = on_retime
         self.hips_xy_m = {f: np.array(hips[3 * i : 3 * i + 2]) for i, f in enumerate(FEET)}
         self.reach_m = leg_m * math.sin(tilt_rad)
         self.events: list[dict[str, Any]] = []
 
     @classmethod
-    def of(cls, policy: DtPolicyConfig, robot: RobotModel) -> StepRetimer | None:
+    def of(
+        cls,
+        policy: DtPolicyConfig,
+        robot: RobotModel,
+        on_retime: Callable[[float], None] | None = None,
+    ) -> StepRetimer | None:
         """The re-timer of a controller with ``policy`` on ``robot``, or None. Only
         ``gaitnet`` re-times (a fixed frequency keeps its timing), and only a robot with a
         3-D humanoid's legs (the planar biped has no reach geometry)."""
         config = policy.gaitnet.retime_steps
         if policy.kind != "gaitnet" or config is None or robot.spec.planar:
             return None
-        return cls(config, robot)
+        return cls(config, robot, on_retime)
 
     def apply(
         self,
@@ -218,6 +231,8 @@ class StepRetimer:
         schedule.retime_step(decision.dt_s)
         swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
         self.events.append(decision.to_dict(state.t_s, schedule.swing_foot))
+        if self.on_retime is not None:
+            self.on_retime(decision.dt_s)
         return True
 
 

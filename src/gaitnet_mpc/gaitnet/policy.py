@@ -9,8 +9,9 @@ the network's dt, clipped into the paper's bounds of the robot
 Sec. VI names the failure: dts that do not settle and solves that hit ``j_max``):
 
 * **out of distribution**: when the ensemble's spread exceeds ``max_spread_s`` the input
-  lies outside what the data taught; the step keeps the previous step's dt (the nominal
-  one at the first step) for the rest of this solve;
+  lies outside what the data taught; the step keeps the dt the previous step ran with
+  (re-timed under way or not; the nominal one at the first step), clipped into the
+  bounds, for the rest of this solve;
 * **cycling**: when the last three dt changes alternate in sign, the next dt is the
   midpoint of the last two; after ``max_damped`` damped iterations the previous step's dt
   is kept;
@@ -60,6 +61,12 @@ class Decision:
     damped: int = 0
     frozen: bool = False
     features: np.ndarray | None = None  # (16,) the last input the network was given
+    retimed_dt_s: float | None = None  # the dt the step under way was re-timed to
+
+    @property
+    def executed_dt_s(self) -> float:
+        """The dt the step ran with: the chosen one, or the one it was re-timed to."""
+        return self.dts_s[-1] if self.retimed_dt_s is None else self.retimed_dt_s
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -68,6 +75,7 @@ class Decision:
             "spread_max_s": round(max(self.spreads_s, default=0.0), 5),
             "fallback": self.fallback,
             "frozen": self.frozen,
+            "retimed_dt_s": None if self.retimed_dt_s is None else round(self.retimed_dt_s, 5),
             "features": None
             if self.features is None
             else [round(float(v), 5) for v in self.features],
@@ -155,11 +163,17 @@ class GaitNetDt:
             return 0.5 * (d.dts_s[-1] + dt)
         return dt
 
+    def step_retimed(self, dt_s: float) -> None:
+        """The step under way was re-timed to ``dt_s`` [s]
+        (:class:`~gaitnet_mpc.control.step_retiming.StepRetimer`)."""
+        if self.decisions:
+            self.decisions[-1].retimed_dt_s = dt_s
+
     def _previous_dt_s(self) -> float:
-        """The dt the previous step start chose (the nominal dt before the first)."""
+        """The dt the previous step ran with (the nominal dt before the first)."""
         if len(self.decisions) < 2:
             return self._nominal_dt_s
-        return self.decisions[-2].dts_s[-1]
+        return self.decisions[-2].executed_dt_s
 
     def _cycling(self, dts: list[float]) -> bool:
         """The last three changes alternate in sign and exceed the tolerance."""
