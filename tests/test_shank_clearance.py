@@ -70,3 +70,62 @@ def test_a_foot_lifted_over_a_box_keeps_its_shank_above_it() -> None:
     low = high.copy()
     low[:, 2] = 0.0
     assert swing_shank_clearance_m(robot, data, cap, "left", p_base, rot, low, box)[0] < 0.0
+
+
+@pytest.mark.parametrize("name", ["humanoid3d", "biped2d"])
+def test_qpos_of_inverts_base_pose(name: str) -> None:
+    """``RobotModel.qpos_of`` gives the qpos whose trunk pose and joints are the ones asked
+    (the planar biped: x, z and pitch)."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(1)
+    joints = rng.uniform(-0.3, 0.3, robot.n_joints)
+    c, s = np.cos(0.2), np.sin(0.2)
+    if robot.spec.planar:
+        p, rot = np.array([0.3, 0.0, 0.55]), np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    else:  # yawed 0.2 rad, then pitched 0.2 rad
+        yaw = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+        p, rot = np.array([0.3, -0.1, 0.6]), yaw @ np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    qpos = robot.qpos_of(p, rot, joints)
+    assert qpos.shape == (robot.mj_model.nq,)
+    p_got, rot_got = robot.base_pose(qpos)
+    np.testing.assert_allclose(p_got, p, atol=1e-12)
+    np.testing.assert_allclose(rot_got, rot, atol=1e-12)
+    np.testing.assert_allclose(qpos[robot.joint_qpos_adr], joints)
+
+
+@pytest.mark.parametrize("name", ["humanoid3d", "biped2d"])
+def test_each_robots_shank_clears_a_box_under_a_lifted_foot(name: str) -> None:
+    """From the standing trunk, the left foot 4 cm above a 5 cm box keeps its shank above
+    the box, and the same foot on the ground in the box's x range cuts into it, for the 3-D
+    humanoid and the planar biped alike (the biped's qpos has x, z and pitch)."""
+    robot = load_robot(name)
+    qpos = robot.standing_qpos()
+    p, rot = robot.base_pose(qpos)
+    d = mujoco.MjData(robot.mj_model)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(robot.mj_model, d)
+    foot = d.site_xpos[robot.foot_site_ids["left"]].copy()
+    box = np.array([[foot[0] + 0.05, foot[0] + 0.15, 0.05]])
+    p_base, rots = np.stack([p, p]), np.stack([rot, rot])
+    high = np.array([[foot[0] + 0.1, foot[1], 0.09]] * 2)
+    cap, data = shank_capsules(robot)["left"], robot.pin_model.createData()
+    assert swing_shank_clearance_m(robot, data, cap, "left", p_base, rots, high, box)[0] > 0.03
+    low = high.copy()
+    low[:, 2] = 0.0
+    assert swing_shank_clearance_m(robot, data, cap, "left", p_base, rots, low, box)[0] < 0.0
+
+
+def test_the_planar_biped_walks_onto_the_built_in_stones() -> None:
+    """Closed loop through the shank check of each swing over the stones (it crashed on the
+    biped's x-z-pitch qpos before ``RobotModel.qpos_of``): `gaitnet` on the planar biped
+    walks 4 s of the built-in stepping stones at 0.5 m/s without a fall."""
+    from gaitnet_mpc.scenario import make_scenario, run_scenario
+
+    scenario = make_scenario(
+        robot="biped2d", controller="gaitnet", course="stepping-stones", vx_mps=0.5,
+        duration_s=4.0,
+    )  # fmt: skip
+    summary = run_scenario(scenario)
+    assert not summary["fell"], summary["fall_reason"]
+    assert summary["foothold_violations"] == 0
+    assert summary["distance_m"] > 1.5

@@ -102,10 +102,8 @@ def swing_shank_clearance_m(
     joints = whole_body_ik(robot, p_base_m, rot_base, {foot: p_foot_m}, yaw).joint_pos_rad
     model = robot.pin_model
     out = np.full(len(obstacles), np.inf)
-    quat = np.empty(4)
     for k in range(p_base_m.shape[0]):
-        mujoco.mju_mat2Quat(quat, rot_base[k].ravel())  # (w, x, y, z)
-        qpos = np.concatenate([p_base_m[k], quat, joints[k]])
+        qpos = robot.qpos_of(p_base_m[k], rot_base[k], joints[k])
         pin.forwardKinematics(model, data, robot.mj_to_pin_q(qpos))
         placement = data.oMi[capsule.joint_id]
         ends = capsule.ends_m @ placement.rotation.T + placement.translation

@@ -176,6 +176,17 @@ class RobotModel:
             return np.array([x, 0.0, z]), np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
         return np.array(qpos[0:3], dtype=float), quat_wxyz_to_matrix(qpos[3:7])
 
+    def qpos_of(self, p_base_m: np.ndarray, rot_base: np.ndarray, joints: np.ndarray) -> np.ndarray:
+        """MuJoCo qpos of a trunk pose (position (3,), rotation (3, 3)) and joint angles in
+        actuator order: the inverse of :meth:`base_pose` (the planar biped keeps x, z and
+        the pitch of ``rot_base``)."""
+        if self.spec.planar:
+            pitch = np.arctan2(rot_base[0, 2], rot_base[0, 0])
+            return np.concatenate([[p_base_m[0], p_base_m[2], pitch], joints])
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rot_base, dtype=float).ravel())
+        return np.concatenate([p_base_m, quat, joints])  # quat: (w, x, y, z)
+
     # ---------------------------------------------------------------- poses
     def nominal_joint_pos(self) -> np.ndarray:
         """Standing joint angles [rad] in actuator order."""
