@@ -149,7 +149,7 @@ def test_every_readme_result_number_is_in_the_file_it_cites() -> None:
 
 def test_the_readme_cites_results_files() -> None:
     cited = {p for _, u in units(README.read_text(encoding="utf-8")) for p in cited_files(u)}
-    assert ROOT / "benchmarks" / "results" / "retime_steps" / "README.md" in cited
+    assert ROOT / "benchmarks" / "results" / "retime_crossing" / "README.md" in cited
     assert ROOT / "docs" / "deviations.md" in cited
 
 

@@ -27,10 +27,16 @@ HIP_RIGHT = np.array([0.009, -0.065])  # humanoid3d's right hip from the CoM, he
 REACH_M = 0.15
 
 
-def _rule(com_vel_mps: tuple[float, float], *, dt_s: float = 0.045, t_in_s: float = 0.05):
+def _rule(
+    com_vel_mps: tuple[float, float],
+    *,
+    dt_s: float = 0.045,
+    t_in_s: float = 0.05,
+    config: StepRetimingConfig | None = None,
+):
     """The rule for a right swing over a left stance foot 0.03 m beside the CoM."""
     return retime_step(
-        StepRetimingConfig(),
+        config or StepRetimingConfig(),
         dt_s=dt_s,
         max_dt_s=0.07,
         time_in_step_s=t_in_s,
@@ -76,6 +82,21 @@ def test_where_no_timing_reaches_the_step_is_kept() -> None:
     """Far out of reach at every end: the pendulum says no timing recovers, so the rule
     leaves the braking to the MPC instead of taking the shortest step."""
     assert _rule((1.6, 0.0)) is None
+
+
+def test_a_foothold_beyond_the_stance_foot_ends_the_step_early() -> None:
+    """Pushed toward the stance side, the foothold lies beyond the left stance foot at
+    every end: the right foot cannot catch (it would cross), so its step ends as early as
+    allowed and the left foot catches next. Without the option the step is kept, and a
+    push away from the stance side that no end reaches keeps it too."""
+    config = StepRetimingConfig()
+    d = _rule((0.5, 0.8))
+    assert d is not None
+    assert d.dt_s == pytest.approx(config.min_dt_s)  # 5 x 0.03 - 0.05 s >= 0.04 s left
+    assert d.excess_after_m > 0.0  # still out of the right hip's reach
+    off = StepRetimingConfig(shortest_when_crossing=False)
+    assert _rule((0.5, 0.8), config=off) is None
+    assert _rule((0.5, -1.6)) is None  # beyond reach on the swing side: no crossing
 
 
 def test_bad_settings_are_named() -> None:

@@ -104,6 +104,10 @@ class StepRetimingConfig:
     # The least swing time left after a re-timing [s]: the foot still has to reach its
     # foothold (0.1 m in 0.04 s is 2.5 m/s). Set, not tuned.
     min_remaining_s: float = bounded(0.04, "(0, 0.2] s", "a duration", "a fifth of a step")
+    # Where no end is in reach and the foothold lies beyond the stance foot, across from
+    # the swing leg (the swing foot would have to cross under the body), end the step as
+    # early as allowed: the other foot catches next. False: keep the step there too.
+    shortest_when_crossing: bool = True
 
     def __post_init__(self) -> None:
         check_ranges(self)

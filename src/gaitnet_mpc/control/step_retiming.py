@@ -25,14 +25,25 @@ the QP's reach pyramid (:mod:`~gaitnet_mpc.mpc.kinematic_rows`): within ``l sin(
 (humanoid3d: 0.15 m) of the swing leg's hip at ``c(tau)`` along the heading and across it.
 If the step's present end keeps ``p*`` in reach, nothing changes. Otherwise the step is
 shortened to the longest duration ``5 dt`` (``dt`` on a grid from ``min_dt_s`` up) whose
-``p*`` is in reach. When no duration puts it in reach, nothing changes either: the
-pendulum, which has no ankle torque and no angular momentum, then says that no timing
-recovers, while the MPC may still brake through the stance foot's centre of pressure and
-the trunk. Taking the shortest step there instead made forward pushes worse (a 75 N push
-at 0.25 m/s, tuning seed 312: six 0.15 s steps, each too short to catch up, and a fall,
-where the unchanged controller took one 0.325 s step and walked on). The rule only
-shortens: a step made longer after a push is what Gait-Net's own answers already do wrong
-(``docs/design/gaitnet_recovery.md``).
+``p*`` is in reach.
+
+When no duration puts ``p*`` in reach, nothing changes either: the pendulum, which has no
+ankle torque and no angular momentum, then says that no timing recovers, while the MPC
+may still brake through the stance foot's centre of pressure and the trunk. Taking the
+shortest step there made forward pushes worse (a 75 N push at 0.25 m/s, tuning seed 312:
+six 0.15 s steps, each too short to catch up, and a fall, where the unchanged controller
+took one 0.325 s step and walked on).
+
+The exception (``shortest_when_crossing``): where ``p*`` lies beyond the stance foot,
+across from the swing leg, the swing foot cannot get there at any end without crossing
+under the body (the QP's separation rows keep the feet apart). The catching step is then
+the other foot's next one, and the step under way ends as early as allowed. Traced on a
+60 N push to the left at phase 0.5 (``docs/design/step_retiming.md``): the right foot's
+step ran its full 0.243 s, the robot rolled over its left stance foot, that leg ran out
+of length and the robot fell; ending the right step at 0.15 s let the left foot catch.
+
+The rule only shortens: a step made longer after a push is what Gait-Net's own answers
+already do wrong (``docs/design/gaitnet_recovery.md``).
 """
 
 from __future__ import annotations
@@ -156,6 +167,16 @@ def retime_step(
     if excess[-1] <= 0.0:
         return None
     ok = np.flatnonzero(excess <= 0.0)
+    if not ok.size and config.shortest_when_crossing and len(dts) > 1:
+        # the capture point at the step's end, across the heading from the stance foot,
+        # on the swing leg's side (> 0) or beyond the stance foot (< 0: crossing)
+        rel = np.asarray(com_m[:2], dtype=float) - np.asarray(stance_m[:2], dtype=float)
+        xi_rel = (rel + np.asarray(com_vel_mps[:2], dtype=float) / omega) * math.exp(
+            omega * tau[-1]
+        )
+        side = math.copysign(1.0, float(hip_offset_xy_m[1]))
+        if side * float(xi_rel @ heading_axes(heading_rad)[1]) < 0.0:
+            ok = np.array([0])  # the shortest end
     if not ok.size:
         return None
     i = int(ok[-1])
