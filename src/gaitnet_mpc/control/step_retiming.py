@@ -87,6 +87,19 @@ class RetimeDecision:
         }
 
 
+def capture_point_m(
+    tau_s: np.ndarray,
+    com_xy_m: np.ndarray,
+    com_vel_xy_mps: np.ndarray,
+    stance_xy_m: np.ndarray,
+    omega_radps: float,
+) -> np.ndarray:
+    """(n, 2) the pendulum's capture point ``xi(tau)`` (module docstring) at each of the
+    ``n`` times ``tau_s``."""
+    rel = com_xy_m - stance_xy_m + com_vel_xy_mps / omega_radps
+    return stance_xy_m + rel * np.exp(omega_radps * tau_s)[:, None]
+
+
 def reach_excess_m(
     tau_s: np.ndarray,
     com_xy_m: np.ndarray,
@@ -101,14 +114,10 @@ def reach_excess_m(
     """(n,) how far ``p*(tau)`` lies outside the swing hip's reach square, for each of the
     ``n`` times ``tau_s`` [m] (<= 0: in reach; module docstring). The pendulum of
     :func:`~gaitnet_mpc.gait.lip.lip_propagate`, for many times at once."""
-    ch, sh, ex = (
-        np.cosh(omega_radps * tau_s),
-        np.sinh(omega_radps * tau_s),
-        np.exp(omega_radps * tau_s),
-    )
+    ch, sh = np.cosh(omega_radps * tau_s), np.sinh(omega_radps * tau_s)
     rel = com_xy_m - stance_xy_m
     c = stance_xy_m + rel * ch[:, None] + (com_vel_xy_mps / omega_radps) * sh[:, None]
-    xi = stance_xy_m + (rel + com_vel_xy_mps / omega_radps) * ex[:, None]
+    xi = capture_point_m(tau_s, com_xy_m, com_vel_xy_mps, stance_xy_m, omega_radps)
     e_x, e_y = heading_axes(heading_rad)
     hip = c + hip_offset_xy_m[0] * e_x + hip_offset_xy_m[1] * e_y
     d = xi - offset_b_m * e_x - hip  # (n, 2)
@@ -153,27 +162,20 @@ def retime_step(
     dts, tau = dts[keep], np.maximum(tau[keep], 0.0)
     period = n * dt_s
     b = speed_cmd_mps * period / math.expm1(omega * period)
-    excess = reach_excess_m(
-        tau,
+    pendulum = (
         np.asarray(com_m[:2], dtype=float),
         np.asarray(com_vel_mps[:2], dtype=float),
         np.asarray(stance_m[:2], dtype=float),
         omega,
-        heading_rad,
-        hip_offset_xy_m,
-        b,
-        reach_m,
     )
+    excess = reach_excess_m(tau, *pendulum, heading_rad, hip_offset_xy_m, b, reach_m)
     if excess[-1] <= 0.0:
         return None
     ok = np.flatnonzero(excess <= 0.0)
     if not ok.size and config.shortest_when_crossing and len(dts) > 1:
         # the capture point at the step's end, across the heading from the stance foot,
         # on the swing leg's side (> 0) or beyond the stance foot (< 0: crossing)
-        rel = np.asarray(com_m[:2], dtype=float) - np.asarray(stance_m[:2], dtype=float)
-        xi_rel = (rel + np.asarray(com_vel_mps[:2], dtype=float) / omega) * math.exp(
-            omega * tau[-1]
-        )
+        xi_rel = capture_point_m(tau[-1:], *pendulum)[0] - pendulum[2]
         side = math.copysign(1.0, float(hip_offset_xy_m[1]))
         if side * float(xi_rel @ heading_axes(heading_rad)[1]) < 0.0:
             ok = np.array([0])  # the shortest end
@@ -257,4 +259,4 @@ class StepRetimer:
         return True
 
 
-__all__ = ["RetimeDecision", "StepRetimer", "reach_excess_m", "retime_step"]
+__all__ = ["RetimeDecision", "StepRetimer", "capture_point_m", "reach_excess_m", "retime_step"]
