@@ -50,3 +50,18 @@ def test_the_oracle_tries_each_candidate_in_a_child_and_the_parent_goes_on() -> 
         assert step.features and all(len(x) == 16 for x in step.features)
     # the parent's steps kept the student's dt: 5 stages of 0.045 s each
     assert all(d == pytest.approx(0.225) for d in episode.controller.step_durations_s[1:])
+
+
+def test_the_oracle_tells_the_inner_policy_of_a_retimed_step() -> None:
+    """The re-timer reports a shortened step to the controller's policy; around Gait-Net
+    that is the oracle, which must pass it on (the inner policy's spread fallback keeps the
+    dt the previous step ran with)."""
+    told: list[float] = []
+
+    class Inner(FixedDt):
+        def step_retimed(self, dt_s: float) -> None:
+            told.append(dt_s)
+
+    RolloutDt(Inner(0.045), lambda t: False).step_retimed(0.0325)
+    assert told == [0.0325]
+    RolloutDt(FixedDt(0.045), lambda t: False).step_retimed(0.0325)  # nothing to tell

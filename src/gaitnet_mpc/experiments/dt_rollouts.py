@@ -123,6 +123,12 @@ class RolloutDt:
     def is_child(self) -> bool:
         return self.child_dt_s is not None
 
+    def step_retimed(self, dt_s: float) -> None:
+        """The step under way was re-timed: told to the inner policy, whose spread fallback
+        keeps the dt the previous step ran with (``GaitNetDt.step_retimed``)."""
+        if hasattr(self.inner, "step_retimed"):
+            self.inner.step_retimed(dt_s)
+
     def __call__(self, problem: KDProblem, iterate: Any, dt_s: float) -> float:
         if problem is self._child_problem:
             assert self.child_dt_s is not None
