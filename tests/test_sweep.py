@@ -55,6 +55,36 @@ def test_bisection_spot_checks_report_non_monotonicity() -> None:
     assert not bisect_largest(survives, 100).non_monotone
 
 
+def test_the_scan_drops_a_survived_island_above_a_fall() -> None:
+    """Survives up to 18, falls 19-22, survives 23-25 by luck, falls above: the bisection
+    lands on the island at 25; the scan from half of it runs 13..24 in order, meets the
+    fall at 19 and sets the bound to 18, the largest force below every fall."""
+    calls: list[int] = []
+
+    def survives(i: int) -> bool:
+        calls.append(i)
+        return i <= 18 or 23 <= i <= 25
+
+    plain = bisect_largest(survives, 100)
+    assert (plain.survived, plain.failed) == (25, 26)
+    calls.clear()
+    b = bisect_largest(survives, 100, spot_fractions=(0.5, 0.25), scan_from=0.5)
+    assert (b.survived, b.failed, b.bisected) == (18, 19, 25)
+    assert len(calls) == len(set(calls))  # each index run once
+    assert not b.non_monotone
+    # a monotone function: the scan confirms the bound and changes nothing
+    mono = bisect_largest(lambda i: i <= 37, 100, scan_from=0.5)
+    assert (mono.survived, mono.failed, mono.bisected) == (37, 38, 37)
+
+
+def test_the_scan_bisects_again_when_the_first_scanned_force_falls() -> None:
+    def survives(i: int) -> bool:  # survives to 9, and 25 by luck (the bisection's probes)
+        return i <= 9 or i == 25
+
+    b = bisect_largest(survives, 100, scan_from=0.5)
+    assert (b.survived, b.failed, b.bisected) == (9, 10, 25)
+
+
 def test_full_push_grid() -> None:
     plan = mode_plan("push", quick=False, seeds=10)
     assert len(plan.directions) == 8 and set(plan.directions) == set(DIRECTIONS)

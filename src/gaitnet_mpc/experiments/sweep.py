@@ -246,6 +246,8 @@ def case_line(r: dict[str, Any]) -> str:
         if res["non_monotone"]:
             text += ", NON-MONOTONE (fell at " + ", ".join(f"{x:g}" for x in res["spot_failed"])
             text += f" {unit})"
+        if res.get("bisected") is not None:
+            text += f", survived {res['bisected']:g} {unit} above that fall (not counted)"
         text += f" ({len(res['episodes'])} episodes)"
     elif mode == "protocol":
         text = "survived" if res["survived"] else f"fell at {res['fall_time_s']:.2f} s"

@@ -75,6 +75,10 @@ class ModePlan:
         hi: top of the bisected range (N for ``push``, kg for ``payload``).
         resolution: bisection grid step (same unit as ``hi``).
         spot_fractions: fractions of the found bound re-run as checks of monotonicity.
+        scan_from: None, or a fraction of the bisection's bound: every grid point from
+            there up to the bound is then run in order, and the first fall sets the bound
+            below it (:func:`bisect_largest`); sweeps made before 2026-12-07 (night) did
+            not scan, and their plans do not name it.
         courses: courses (``payload``: built-in names; ``terrain``: ``uneven`` amplitudes
             as ``uneven:<amplitude m>`` and ``stepping-stones``).
         seeds: seeds (``protocol``: push draws; ``terrain``: course layouts).
@@ -93,6 +97,7 @@ class ModePlan:
     hi: float = 0.0
     resolution: float = 1.0
     spot_fractions: tuple[float, ...] = ()
+    scan_from: float | None = None
     courses: tuple[str, ...] = ()
     seeds: tuple[int, ...] = ()
     phase_of: str = "nominal"
@@ -137,6 +142,7 @@ def mode_plan(mode: str, quick: bool, seeds: int) -> ModePlan:
             hi=500.0,
             resolution=5.0,
             spot_fractions=(0.5, 0.25),
+            scan_from=0.5,
             phase_of="executed",
         )
     if mode == "protocol":
@@ -245,12 +251,15 @@ class Bisection:
         failed: the smallest failing index above it (None: the top survived).
         spot_failed: indices below ``survived`` that were run as checks and fell.
         probes: every index run, in order, with whether it was survived.
+        bisected: the bisection's own bound, before the scan lowered it (equal to
+            ``survived`` without a scan or where the scan found no fall).
     """
 
     survived: int | None
     failed: int | None
     spot_failed: list[int] = field(default_factory=list)
     probes: list[tuple[int, bool]] = field(default_factory=list)
+    bisected: int | None = None
 
     @property
     def non_monotone(self) -> bool:
@@ -258,12 +267,22 @@ class Bisection:
 
 
 def bisect_largest(
-    survives: Callable[[int], bool], n: int, spot_fractions: tuple[float, ...] = ()
+    survives: Callable[[int], bool],
+    n: int,
+    spot_fractions: tuple[float, ...] = (),
+    scan_from: float | None = None,
 ) -> Bisection:
     """The largest ``i`` in ``[0, n]`` with ``survives(i)``, assuming monotonicity (every
     smaller index survives too); each index is run at most once, the ends only when the
-    bisection reaches them. ``spot_fractions`` (e.g. 0.5: half the found bound) are then
-    run as checks of that assumption: one that falls makes the result non-monotone."""
+    bisection reaches them.
+
+    ``scan_from`` (e.g. 0.5) drops that assumption above a fraction of the bound: every
+    index from ``floor(scan_from * bound) + 1`` up to the bound is run in order, and at the
+    first that falls the bound is bisected again below it (and scanned again). A survived
+    force above a fall (an island: a push survived by luck of where the foot happens to
+    land) then does not count. ``spot_fractions`` (e.g. 0.5: half the found bound) are run
+    last, as checks of the assumption below the scan: one that falls makes the result
+    non-monotone."""
     seen: dict[int, bool] = {}
     probes: list[tuple[int, bool]] = []
 
@@ -273,24 +292,31 @@ def bisect_largest(
             probes.append((i, seen[i]))
         return seen[i]
 
-    lo, hi = 0, n  # lo: survived (or assumed), hi: failed (or assumed)
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if ok(mid):
-            lo = mid
-        else:
-            hi = mid
+    def bisect(lo: int, hi: int) -> tuple[int, int]:  # lo: survived or assumed; hi: failed
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+        return lo, hi
+
+    lo, hi = bisect(0, n)
     failed: int | None = hi
     if hi == n and ok(n):  # the top of the range is run only if reached
         lo, failed = n, None
+    bisected = lo
+    while scan_from is not None and lo > 0:
+        fell = next((i for i in range(math.floor(lo * scan_from) + 1, lo) if not ok(i)), None)
+        if fell is None:
+            break
+        below = max((i for i, alive in seen.items() if alive and i < fell), default=0)
+        lo, failed = bisect(below, fell)
     if lo == 0 and not ok(0):
-        return Bisection(None, 0, [], probes)
+        return Bisection(None, 0, [], probes, None)
     spot_failed = []
     for frac in spot_fractions:
         i = math.floor(lo * frac)
         if 0 < i < lo and not ok(i):
             spot_failed.append(i)
-    return Bisection(lo, failed, sorted(set(spot_failed)), probes)
+    return Bisection(lo, failed, sorted(set(spot_failed)), probes, bisected)
 
 
 # ----------------------------------------------------------------------------- episodes
@@ -383,7 +409,8 @@ def _push_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:
         episodes.append({"force_n": f, **out})
         return not out["fell"]
 
-    b = bisect_largest(survives, round(plan.hi / plan.resolution), plan.spot_fractions)
+    n = round(plan.hi / plan.resolution)
+    b = bisect_largest(survives, n, plan.spot_fractions, plan.scan_from)
     phase_measured, swing = measured[0] if measured else (None, "")
     record = {
         **_bounds(b, plan.resolution),
@@ -414,12 +441,15 @@ def _push_time_s(controller: str, vx_mps: float, phase: float, plan: ModePlan) -
 
 
 def _bounds(b: Bisection, res: float) -> dict[str, Any]:
-    return {
+    out = {
         "survived": None if b.survived is None else b.survived * res,
         "failed": None if b.failed is None else b.failed * res,
         "non_monotone": b.non_monotone,
         "spot_failed": [i * res for i in b.spot_failed],
     }
+    if b.bisected is not None and b.bisected != b.survived:  # an island the scan dropped
+        out["bisected"] = b.bisected * res
+    return out
 
 
 def _payload_case(case: dict[str, Any], plan: ModePlan) -> dict[str, Any]:

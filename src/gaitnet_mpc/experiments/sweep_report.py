@@ -27,7 +27,7 @@ CSV_FIELDS: dict[str, tuple[str, ...]] = {
     "push": (
         "controller", "speed_mps", "direction", "phase", "push_t_s", "phase_measured",
         "swing_foot", "survived_n", "survived_impulse_ns", "failed_n", "falls_unpushed",
-        "non_monotone", "spot_failed_n", "episodes", "wall_s",
+        "non_monotone", "spot_failed_n", "bisected_n", "episodes", "wall_s",
     ),
     "payload": (
         "controller", "course", "survived_kg", "failed_kg", "falls_unloaded", "non_monotone",
@@ -68,6 +68,7 @@ def csv_row(mode: str, r: Record) -> dict[str, Any]:
         impulse = None if res["survived"] is None else res["survived"] * PUSH_DURATION_S
         return {
             **row,
+            "bisected_n": _num(res.get("bisected")),
             "speed_mps": case["speed_mps"],
             "direction": case["direction"],
             "phase": case["phase"],
@@ -100,6 +101,8 @@ def _bound_text(res: dict[str, Any], unit: str) -> str:
         text = f">= {text}"
     if res["non_monotone"]:
         text += " (!" + ",".join(f"{x:g}" for x in res["spot_failed"]) + ")"
+    if res.get("bisected") is not None:
+        text += f" (^{res['bisected']:g})"
     return text
 
 
@@ -175,7 +178,10 @@ def _terrain_table(records: Sequence[Record], controllers: Sequence[str]) -> lis
 LEGENDS = {
     "push": f"Cells: the largest force [N] of a {PUSH_DURATION_S:g} s push at the trunk CoM "
     "(impulse 0.2 F [N s]) survived without a fall until the episode ends, by bisection on "
-    "the force grid; `>= F`: the top of the range was survived; `(!F)`: a spot check below "
+    "the force grid; where the plan scans (`scan_from`), every force from that fraction of "
+    "the bisection's bound up to it was run too, and the cell is the force below the first "
+    "fall; `(^F)`: the bisection had found F survived above that fall (an island, not "
+    "counted); `>= F`: the top of the range was survived; `(!F)`: a spot check below "
     "the bound fell at F (non-monotone); `falls unpushed`: the unpushed run fell.",
     "payload": "Cells: the largest unknown trunk payload [kg] walked for the whole episode "
     "without a fall, by bisection; `>= m`: the top of the range was walked; `(!m)`: a spot "
