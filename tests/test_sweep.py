@@ -12,12 +12,8 @@ import pytest
 
 from gaitnet_mpc.cli import main
 from gaitnet_mpc.errors import ConfigError
-from gaitnet_mpc.experiments.sweep_cases import (
-    DIRECTIONS,
-    bisect_largest,
-    make_cases,
-    mode_plan,
-)
+from gaitnet_mpc.experiments.bisection import bisect_largest
+from gaitnet_mpc.experiments.sweep_cases import DIRECTIONS, make_cases, mode_plan
 
 
 # ----------------------------------------------------------------------------- bisection
