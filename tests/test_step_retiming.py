@@ -123,6 +123,39 @@ def test_the_schedule_ends_a_retimed_step_earlier() -> None:
         sched.retime_step(0.035)  # it would have ended 0.025 s ago
 
 
+def test_a_loaded_landing_in_the_second_half_ends_the_step_at_the_next_tick() -> None:
+    from types import SimpleNamespace
+
+    from gaitnet_mpc.control.step_retiming import StepRetimer
+    from gaitnet_mpc.robots import load_robot
+
+    robot = load_robot("humanoid3d")
+    retimer = StepRetimer(StepRetimingConfig(end_at_touchdown=True), robot)
+    weight = robot.total_mass_kg * GRAVITY_MPS2
+
+    def state(t_s: float, fz_n: float) -> SimpleNamespace:
+        wrench = {"left": np.zeros(6), "right": np.zeros(6)}
+        wrench[sched.swing_foot] = np.array([0.0, 0.0, fz_n, 0.0, 0.0, 0.0])
+        return SimpleNamespace(t_s=t_s, foot_wrench_world=wrench)
+
+    sched = GaitSchedule(GaitScheduleConfig(dt_bounds_s=(0.03, 0.07)))
+    sched.set_step_dt(0.045)  # a 0.225 s step
+    swing = SwingConfig(apex_height_m=0.06).trajectory(np.zeros(3), np.ones(3) * 0.1, 0.225)
+    sched.advance_to(0.09)  # phase 0.4: a contact is the lift-off's scuff
+    assert not retimer.end_at_touchdown(state(0.09, weight), sched, swing)
+    sched.advance_to(0.18)  # phase 0.8
+    assert not retimer.end_at_touchdown(state(0.18, 0.3 * weight), sched, swing)  # grazing
+    assert retimer.end_at_touchdown(state(0.18, 0.6 * weight), sched, swing)
+    assert sched.step_end_time_s == pytest.approx(0.181)
+    assert swing.duration_s == pytest.approx(0.181)
+    assert retimer.events[-1]["kind"] == "retime" and retimer.events[-1]["dt_s"] < 0.045
+    sched.advance_to(0.181)
+    assert sched.step_index == 1
+    off = StepRetimer(StepRetimingConfig(), robot)  # the default: no such ending
+    sched.advance_to(0.181 + 0.18)
+    assert not off.end_at_touchdown(state(0.361, weight), sched, swing)
+
+
 @pytest.mark.parametrize("t_now", [0.05, 0.12])
 def test_a_retimed_swing_is_continuous_and_lands_at_its_new_end(t_now: float) -> None:
     p0, p1 = np.array([0.0, -0.1, 0.05]), np.array([0.2, -0.1, 0.05])

@@ -153,12 +153,8 @@ class KDWalkController(WalkingBase):
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
         if self.plan is None:
             return []
-        out = []
-        for foot in FEET:
-            td = self.plan.touchdown(foot)
-            if td is not None:
-                out.append((foot, td.copy()))
-        return out
+        touchdowns = [(foot, self.plan.touchdown(foot)) for foot in FEET]
+        return [(foot, td.copy()) for foot, td in touchdowns if td is not None]
 
     # ---------------------------------------------------------------- helpers
     def _command_now(self, t_s: float) -> Command:
@@ -470,6 +466,8 @@ class KDWalkController(WalkingBase):
         sched.advance_to(state.t_s)
         if self.observer is not None:
             self.observer.update(state)
+        if self.retimer and self.retimer.end_at_touchdown(state, sched, self.swing):
+            self._steps[-1] = sched.current_step_duration_s
         if sched.at_step_start and sched.step_index != self._started_step:
             self._started_step = sched.step_index
             self._start_step(state)

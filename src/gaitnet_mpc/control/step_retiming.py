@@ -44,6 +44,11 @@ of length and the robot fell; ending the right step at 0.15 s let the left foot 
 
 The rule only shortens: a step made longer after a push is what Gait-Net's own answers
 already do wrong (``docs/design/gaitnet_recovery.md``).
+
+A landing (``end_at_touchdown``, an option): a swing foot that touches down in the second
+half of its step with at least half the robot's weight on it ends the step at the next
+tick, so that the MPC takes it as its stance foot where it landed; otherwise the swing PD
+drives it on along the rest of its swing, below the ground.
 """
 
 from __future__ import annotations
@@ -58,7 +63,7 @@ import numpy as np
 from gaitnet_mpc.dt_policy import DtPolicyConfig, StepRetimingConfig
 from gaitnet_mpc.gait import GaitSchedule, SwingTrajectory
 from gaitnet_mpc.gait.lip import lip_frequency
-from gaitnet_mpc.geometry import heading_axes
+from gaitnet_mpc.geometry import GRAVITY_MPS2, heading_axes
 from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
@@ -207,6 +212,7 @@ class StepRetimer:
         self.on_retime = on_retime
         self.hips_xy_m = {f: np.array(hips[3 * i : 3 * i + 2]) for i, f in enumerate(FEET)}
         self.reach_m = leg_m * math.sin(tilt_rad)
+        self.half_weight_n = 0.5 * robot.total_mass_kg * GRAVITY_MPS2
         self.events: list[dict[str, Any]] = []
 
     @classmethod
@@ -223,6 +229,35 @@ class StepRetimer:
         if policy.kind != "gaitnet" or config is None or robot.spec.planar:
             return None
         return cls(config, robot, on_retime)
+
+    def end_at_touchdown(
+        self, state: RobotState, schedule: GaitSchedule, swing: SwingTrajectory | None
+    ) -> bool:
+        """With ``config.end_at_touchdown``: where the swing foot has landed in the second
+        half of the step, carrying at least half the robot's weight, the step ends at the
+        next tick (or as soon as the schedule's bounds allow); True if it was re-timed.
+        Logged as a ``retime`` event with zero reach excess."""
+        foot = schedule.swing_foot
+        if (
+            not self.config.end_at_touchdown
+            or swing is None
+            or schedule.phase_in_step < 0.5
+            or state.foot_wrench_world[foot][2] < self.half_weight_n
+        ):
+            return False
+        n = schedule.config.stages_per_step
+        dt = max((schedule.time_in_step_s + 0.001) / n, schedule.config.dt_bounds_s[0])
+        if dt >= schedule.current_step_dt_s - 1e-9:
+            return False
+        before = schedule.current_step_dt_s
+        schedule.retime_step(dt)
+        swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
+        self.events.append(
+            RetimeDecision(dt, before, schedule.time_in_step_s, 0.0, 0.0).to_dict(state.t_s, foot)
+        )
+        if self.on_retime is not None:
+            self.on_retime(dt)
+        return True
 
     def apply(
         self,
