@@ -60,6 +60,7 @@ from typing import Any
 
 import numpy as np
 
+from gaitnet_mpc.control.blind_touchdown import EARLY_TOUCHDOWN_PHASE
 from gaitnet_mpc.dt_policy import DtPolicyConfig, StepRetimingConfig
 from gaitnet_mpc.gait import GaitSchedule, SwingTrajectory
 from gaitnet_mpc.gait.lip import lip_frequency
@@ -237,27 +238,36 @@ class StepRetimer:
         half of the step, carrying at least half the robot's weight, the step ends at the
         next tick (or as soon as the schedule's bounds allow); True if it was re-timed.
         Logged as a ``retime`` event with zero reach excess."""
-        foot = schedule.swing_foot
         if (
             not self.config.end_at_touchdown
             or swing is None
-            or schedule.phase_in_step < 0.5
-            or state.foot_wrench_world[foot][2] < self.half_weight_n
+            or schedule.phase_in_step < EARLY_TOUCHDOWN_PHASE
+            or state.foot_wrench_world[schedule.swing_foot][2] < self.half_weight_n
         ):
             return False
         n = schedule.config.stages_per_step
         dt = max((schedule.time_in_step_s + 0.001) / n, schedule.config.dt_bounds_s[0])
         if dt >= schedule.current_step_dt_s - 1e-9:
             return False
-        before = schedule.current_step_dt_s
-        schedule.retime_step(dt)
-        swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
-        self.events.append(
-            RetimeDecision(dt, before, schedule.time_in_step_s, 0.0, 0.0).to_dict(state.t_s, foot)
-        )
-        if self.on_retime is not None:
-            self.on_retime(dt)
+        t_in = schedule.time_in_step_s
+        decision = RetimeDecision(dt, schedule.current_step_dt_s, t_in, 0.0, 0.0)
+        self._shorten(state, schedule, swing, decision)
         return True
+
+    def _shorten(
+        self,
+        state: RobotState,
+        schedule: GaitSchedule,
+        swing: SwingTrajectory,
+        decision: RetimeDecision,
+    ) -> None:
+        """End the step under way (schedule and swing) as ``decision`` says, log it and tell
+        ``on_retime``."""
+        schedule.retime_step(decision.dt_s)
+        swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
+        self.events.append(decision.to_dict(state.t_s, schedule.swing_foot))
+        if self.on_retime is not None:
+            self.on_retime(decision.dt_s)
 
     def apply(
         self,
@@ -286,11 +296,7 @@ class StepRetimer:
         )
         if decision is None:
             return False
-        schedule.retime_step(decision.dt_s)
-        swing.retime(schedule.current_step_duration_s, schedule.time_in_step_s)
-        self.events.append(decision.to_dict(state.t_s, schedule.swing_foot))
-        if self.on_retime is not None:
-            self.on_retime(decision.dt_s)
+        self._shorten(state, schedule, swing, decision)
         return True
 
 
