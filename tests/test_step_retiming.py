@@ -136,7 +136,8 @@ def test_a_loaded_landing_in_the_second_half_ends_the_step_at_the_next_tick() ->
     def state(t_s: float, fz_n: float) -> SimpleNamespace:
         wrench = {"left": np.zeros(6), "right": np.zeros(6)}
         wrench[sched.swing_foot] = np.array([0.0, 0.0, fz_n, 0.0, 0.0, 0.0])
-        return SimpleNamespace(t_s=t_s, foot_wrench_world=wrench)
+        feet = {"left": np.zeros(3), "right": np.zeros(3)}
+        return SimpleNamespace(t_s=t_s, foot_wrench_world=wrench, foot_pos_world_m=feet)
 
     sched = GaitSchedule(GaitScheduleConfig(dt_bounds_s=(0.03, 0.07)))
     sched.set_step_dt(0.045)  # a 0.225 s step
@@ -154,6 +155,47 @@ def test_a_loaded_landing_in_the_second_half_ends_the_step_at_the_next_tick() ->
     off = StepRetimer(StepRetimingConfig(), robot)  # the default: no such ending
     sched.advance_to(0.181 + 0.18)
     assert not off.end_at_touchdown(state(0.361, weight), sched, swing)
+
+
+@pytest.mark.parametrize(
+    ("x_m", "foot", "ends"),
+    [
+        (0.50, "left", True),  # on the stone
+        (0.42, "left", True),  # on its edge, the centre on it
+        (0.30, "left", False),  # short of the stone: its centre over the hole
+        (0.50, "right", False),  # a stone for the left foot only
+    ],
+)
+def test_a_landing_ends_the_step_only_on_a_patch_the_foot_may_use(
+    x_m: float, foot: str, ends: bool
+) -> None:
+    from types import SimpleNamespace
+
+    from gaitnet_mpc.control.step_retiming import StepRetimer
+    from gaitnet_mpc.control.terrain_view import TerrainKnowledge, TerrainView
+    from gaitnet_mpc.robots import load_robot
+    from gaitnet_mpc.terrain import Course, Patch
+
+    robot = load_robot("humanoid3d")
+    stones = (Patch(-0.3, 0.1, -0.3, 0.3, 0.0), Patch(0.4, 0.6, -0.3, 0.3, 0.1, "left"))
+    view = TerrainView(Course("stones", stones))
+    retimer = StepRetimer(StepRetimingConfig(end_at_touchdown=True), robot, None, view.holds_foot)
+    sched = GaitSchedule(GaitScheduleConfig(dt_bounds_s=(0.03, 0.07)))
+    if sched.swing_foot != foot:  # the next step swings the other foot
+        sched.advance_to(0.226)
+    sched.set_step_dt(0.045)
+    t_s = sched.step_start_time_s + 0.18  # phase 0.8
+    sched.advance_to(t_s)
+    assert sched.swing_foot == foot
+    swing = SwingConfig(apex_height_m=0.06).trajectory(np.zeros(3), np.ones(3) * 0.1, 0.225)
+    pos = {"left": np.zeros(3), "right": np.zeros(3)}
+    pos[foot] = np.array([x_m, 0.0, 0.11])
+    wrench = {"left": np.zeros(6), "right": np.zeros(6)}
+    wrench[foot][2] = robot.total_mass_kg * GRAVITY_MPS2
+    state = SimpleNamespace(t_s=t_s, foot_wrench_world=wrench, foot_pos_world_m=pos)
+    assert retimer.end_at_touchdown(state, sched, swing) is ends
+    blind = TerrainView(Course("stones", stones), TerrainKnowledge(blind=True))
+    assert blind.holds_foot(foot, np.array([0.3, 0.0, 0.0]))  # the contact is all it knows
 
 
 @pytest.mark.parametrize("t_now", [0.05, 0.12])

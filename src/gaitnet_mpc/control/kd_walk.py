@@ -96,7 +96,7 @@ class KDWalkController(WalkingBase):
         self.dt_policy = dt_policy
         self.mpc = SequentialKDMPC(robot, sequential, dt_policy)
         on_retime = getattr(dt_policy, "step_retimed", None)  # Gait-Net's fallback reads it
-        self.retimer = StepRetimer.of(self.config.dt_policy, robot, on_retime)
+        self.retimer = StepRetimer.of(self.config.dt_policy, robot, on_retime, terrain.holds_foot)
         lo, hi = self.config.sequential.dt_bounds_s
         if self.retimer is not None:  # a re-timed step may go below the policy's bounds
             lo = min(lo, self.retimer.config.min_dt_s)

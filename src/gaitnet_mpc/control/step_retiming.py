@@ -48,7 +48,11 @@ already do wrong (``docs/design/gaitnet_recovery.md``).
 A landing (``end_at_touchdown``, an option): a swing foot that touches down in the second
 half of its step with at least half the robot's weight on it ends the step at the next
 tick, so that the MPC takes it as its stance foot where it landed; otherwise the swing PD
-drives it on along the rest of its swing, below the ground.
+drives it on along the rest of its swing, below the ground. Only where the foot's centre
+is on a patch it may use (:meth:`TerrainView.holds_foot`): on stones an early landing may
+fall short of the stone, onto its edge, and ending the step there makes the landing a
+foothold violation, where the swing would have carried the foot on (seeded stones,
+seed 5: `benchmarks/results/end_at_touchdown/on_patch/`).
 """
 
 from __future__ import annotations
@@ -68,6 +72,10 @@ from gaitnet_mpc.geometry import GRAVITY_MPS2, heading_axes
 from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
+
+LandingCheck = Callable[[str, np.ndarray], bool]
+"""Whether a foot (``"left"``/``"right"``) whose centre is at a point (3,) [m] stands on a
+foothold (``end_at_touchdown``)."""
 
 
 @dataclass(frozen=True)
@@ -207,10 +215,12 @@ class StepRetimer:
         config: StepRetimingConfig,
         robot: RobotModel,
         on_retime: Callable[[float], None] | None = None,
+        landing: LandingCheck | None = None,
     ) -> None:
         hips, leg_m, tilt_rad = reach_geometry(robot)
         self.config = config
         self.on_retime = on_retime
+        self.landing = landing
         self.hips_xy_m = {f: np.array(hips[3 * i : 3 * i + 2]) for i, f in enumerate(FEET)}
         self.reach_m = leg_m * math.sin(tilt_rad)
         self.half_weight_n = 0.5 * robot.total_mass_kg * GRAVITY_MPS2
@@ -222,6 +232,7 @@ class StepRetimer:
         policy: DtPolicyConfig,
         robot: RobotModel,
         on_retime: Callable[[float], None] | None = None,
+        landing: LandingCheck | None = None,
     ) -> StepRetimer | None:
         """The re-timer of a controller with ``policy`` on ``robot``, or None. Only
         ``gaitnet`` re-times (a fixed frequency keeps its timing), and only a robot with a
@@ -229,21 +240,25 @@ class StepRetimer:
         config = policy.gaitnet.retime_steps
         if policy.kind != "gaitnet" or config is None or robot.spec.planar:
             return None
-        return cls(config, robot, on_retime)
+        return cls(config, robot, on_retime, landing)
 
     def end_at_touchdown(
         self, state: RobotState, schedule: GaitSchedule, swing: SwingTrajectory | None
     ) -> bool:
         """With ``config.end_at_touchdown``: where the swing foot has landed in the second
-        half of the step, carrying at least half the robot's weight, the step ends at the
-        next tick (or as soon as the schedule's bounds allow); True if it was re-timed.
-        Logged as a ``retime`` event with zero reach excess."""
+        half of the step, carrying at least half the robot's weight, on a foothold that
+        ``landing`` (if given) accepts, the step ends at the next tick (or as soon as the
+        schedule's bounds allow); True if it was re-timed. Logged as a ``retime`` event
+        with zero reach excess."""
+        foot = schedule.swing_foot
         if (
             not self.config.end_at_touchdown
             or swing is None
             or schedule.phase_in_step < EARLY_TOUCHDOWN_PHASE
-            or state.foot_wrench_world[schedule.swing_foot][2] < self.half_weight_n
+            or state.foot_wrench_world[foot][2] < self.half_weight_n
         ):
+            return False
+        if self.landing is not None and not self.landing(foot, state.foot_pos_world_m[foot]):
             return False
         n = schedule.config.stages_per_step
         dt = max((schedule.time_in_step_s + 0.001) / n, schedule.config.dt_bounds_s[0])
@@ -300,4 +315,11 @@ class StepRetimer:
         return True
 
 
-__all__ = ["RetimeDecision", "StepRetimer", "capture_point_m", "reach_excess_m", "retime_step"]
+__all__ = [
+    "LandingCheck",
+    "RetimeDecision",
+    "StepRetimer",
+    "capture_point_m",
+    "reach_excess_m",
+    "retime_step",
+]

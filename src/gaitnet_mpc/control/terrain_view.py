@@ -88,6 +88,15 @@ class TerrainView:
         j = self.patch_at(x_m, y_m)
         return self.patch(j).z_top_m if j is not None else default_m
 
+    def holds_foot(self, foot: str, pos_m: ArrayLike) -> bool:
+        """True iff a ``foot`` whose centre is at ``pos_m`` (x, y, ...) stands on a patch
+        that allows it: the simulator's foothold rule (a landing elsewhere is a
+        violation). When blind, True: the contact is all a blind controller knows."""
+        if self.knowledge.blind:
+            return True
+        x, y = (float(v) for v in np.asarray(pos_m, dtype=float)[:2])
+        return self._course.foot_allowed(x, y, foot)
+
     def reachable_foothold_bounds(
         self,
         p_com_touchdown_xy: ArrayLike,
