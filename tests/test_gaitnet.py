@@ -170,7 +170,13 @@ def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path)
     assert policy["decisions"] == len(summary["step_durations_s"]) >= 10
     chosen = np.array([d["dts_s"][-1] for d in policy["steps"]])
     assert np.all((chosen >= 0.045 - 1e-12) & (chosen <= 0.07 + 1e-12))
-    np.testing.assert_allclose(summary["step_durations_s"], 5 * chosen, atol=1e-3)
+    # each step lasts h' of its dt, or ends where its foot landed in its second half (the
+    # landing rule, a logged event; on flat ground the re-timing never fires unpushed)
+    planned, executed = 5 * chosen, np.array(summary["step_durations_s"])
+    short = executed < planned - 1e-3
+    assert np.all(executed <= planned + 1e-3) and np.all(executed >= 0.5 * planned)
+    kinds = [e["kind"] for e in summary["swing_events"]]
+    assert short.sum() == kinds.count("landing") and "retime" not in kinds
     assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
     # each decision records the net's input: 16 features, the CoM above the stance foot
     feats = np.array([d["features"] for d in policy["steps"]])

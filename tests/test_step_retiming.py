@@ -33,6 +33,7 @@ def _rule(
     dt_s: float = 0.045,
     t_in_s: float = 0.05,
     config: StepRetimingConfig | None = None,
+    box_xy_m: tuple[np.ndarray, np.ndarray] | None = None,
 ):
     """The rule for a right swing over a left stance foot 0.03 m beside the CoM."""
     return retime_step(
@@ -47,6 +48,7 @@ def _rule(
         hip_offset_xy_m=HIP_RIGHT,
         reach_m=REACH_M,
         speed_cmd_mps=0.5,
+        box_xy_m=box_xy_m,
     )
 
 
@@ -76,6 +78,19 @@ def test_a_push_shortens_the_step_within_its_bounds() -> None:
     assert 5 * d.dt_s - 0.05 >= StepRetimingConfig().min_remaining_s - 1e-12
     # a step already at its shortest cannot be shortened
     assert _rule((0.8, 0.0), dt_s=0.03) is None
+
+
+def test_where_the_terrain_sets_the_foothold_only_an_end_it_offers_is_taken() -> None:
+    """On a stone the swing lands in its eq. 24 box whatever the timing: an end whose
+    foothold p* is off the box would only hurry the swing to the same stone. A box that
+    holds p* (open ground) leaves the rule as it is."""
+    d = _rule((0.8, 0.0))
+    assert d is not None
+    wide = (np.array([-10.0, -10.0]), np.array([10.0, 10.0]))
+    assert _rule((0.8, 0.0), box_xy_m=wide) == d
+    stone = (np.array([0.40, -0.2]), np.array([0.45, 0.0]))  # far ahead: p* is not on it
+    assert _rule((0.8, 0.0), box_xy_m=stone) is None
+    assert _rule((0.5, 0.8), box_xy_m=stone) is None  # nor the crossing case's end
 
 
 def test_where_no_timing_reaches_the_step_is_kept() -> None:
@@ -130,7 +145,7 @@ def test_a_loaded_landing_in_the_second_half_ends_the_step_at_the_next_tick() ->
     from gaitnet_mpc.robots import load_robot
 
     robot = load_robot("humanoid3d")
-    retimer = StepRetimer(StepRetimingConfig(end_at_touchdown=True), robot)
+    retimer = StepRetimer(StepRetimingConfig(), robot)  # on by default
     weight = robot.total_mass_kg * GRAVITY_MPS2
 
     def state(t_s: float, fz_n: float) -> SimpleNamespace:
@@ -149,10 +164,10 @@ def test_a_loaded_landing_in_the_second_half_ends_the_step_at_the_next_tick() ->
     assert retimer.end_at_touchdown(state(0.18, 0.6 * weight), sched, swing)
     assert sched.step_end_time_s == pytest.approx(0.181)
     assert swing.duration_s == pytest.approx(0.181)
-    assert retimer.events[-1]["kind"] == "retime" and retimer.events[-1]["dt_s"] < 0.045
+    assert retimer.events[-1]["kind"] == "landing" and retimer.events[-1]["dt_s"] < 0.045
     sched.advance_to(0.181)
     assert sched.step_index == 1
-    off = StepRetimer(StepRetimingConfig(), robot)  # the default: no such ending
+    off = StepRetimer(StepRetimingConfig(end_at_touchdown=False), robot)  # no such ending
     sched.advance_to(0.181 + 0.18)
     assert not off.end_at_touchdown(state(0.361, weight), sched, swing)
 
@@ -195,7 +210,7 @@ def test_a_landing_ends_the_step_only_on_a_patch_the_foot_may_use(
     state = SimpleNamespace(t_s=t_s, foot_wrench_world=wrench, foot_pos_world_m=pos)
     assert retimer.end_at_touchdown(state, sched, swing) is ends
     blind = TerrainView(Course("stones", stones), TerrainKnowledge(blind=True))
-    assert blind.holds_foot(foot, np.array([0.3, 0.0, 0.0]))  # the contact is all it knows
+    assert not blind.holds_foot(foot, np.array([0.5, 0.0, 0.11]))  # it cannot tell
 
 
 @pytest.mark.parametrize("t_now", [0.05, 0.12])

@@ -109,11 +109,11 @@ class StepRetimingConfig:
     # early as allowed: the other foot catches next. False: keep the step there too.
     shortest_when_crossing: bool = True
     # A swing foot that lands in the second half of its step, carrying at least half the
-    # robot's weight, ends the step at the next tick: the foot becomes the MPC's stance
-    # foot where it landed, instead of being driven on along the rest of its swing into the
-    # ground (which launched the robot: docs/design/step_retiming.md). Measured as an
-    # option (benchmarks/results/end_at_touchdown/).
-    end_at_touchdown: bool = False
+    # robot's weight, on a patch it may use, ends the step at the next tick: the foot
+    # becomes the MPC's stance foot where it landed, instead of being driven on along the
+    # rest of its swing into the ground (which launched the robot:
+    # docs/design/step_retiming.md; benchmarks/results/landing_and_box/).
+    end_at_touchdown: bool = True
 
     def __post_init__(self) -> None:
         check_ranges(self)

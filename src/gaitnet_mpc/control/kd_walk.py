@@ -147,7 +147,7 @@ class KDWalkController(WalkingBase):
 
     @property
     def swing_events(self) -> list[dict[str, Any]]:
-        retimes = self.retimer.events if self.retimer else []  # kind "retime"
+        retimes = self.retimer.events if self.retimer else []  # "retime", "landing"
         return sorted(self.obstacles.events + retimes, key=lambda e: e["t_s"])
 
     def planned_footholds(self) -> list[tuple[str, np.ndarray]]:
@@ -472,8 +472,9 @@ class KDWalkController(WalkingBase):
             self._started_step = sched.step_index
             self._start_step(state)
         elif state.t_s >= self.next_replan_s:
-            heading, cmd = self.profile.heading_rad(state.t_s), self._command_now(state.t_s)
-            if self.retimer and self.retimer.apply(state, sched, self.swing, heading, cmd.vx_mps):
+            heading, vx = self.profile.heading_rad(state.t_s), self._command_now(state.t_s).vx_mps
+            box = None if self.plan is None else self.plan.foothold_boxes.get(sched.swing_foot)
+            if self.retimer and self.retimer.apply(state, sched, self.swing, heading, vx, box):
                 self._steps[-1] = sched.current_step_duration_s  # re-timed under way
             self._solve(state, full=False)
             self.next_replan_s = state.t_s + self.config.replan_period_s

@@ -27,6 +27,14 @@ If the step's present end keeps ``p*`` in reach, nothing changes. Otherwise the 
 shortened to the longest duration ``5 dt`` (``dt`` on a grid from ``min_dt_s`` up) whose
 ``p*`` is in reach.
 
+Where the terrain decides the foothold (stones, a gap's far side), an end counts only if
+its ``p*`` also lies in the eq. 24 box of the step's touchdown: the swing lands in that box
+whatever the timing, so a shorter step there only asks the swing to cover the same
+distance in less time. Traced on tuning stones, seed 124: Gait-Net chose a 0.33 s step for
+the 0.56 m stride to the next stone, the rule cut it to 0.19 s at its start, and the foot
+landed 3.5 cm short of the stone and the robot fell. On open ground the box holds every
+``p*`` and the rule is unchanged.
+
 When no duration puts ``p*`` in reach, nothing changes either: the pendulum, which has no
 ankle torque and no angular momentum, then says that no timing recovers, while the MPC
 may still brake through the stance foot's centre of pressure and the trunk. Taking the
@@ -45,7 +53,7 @@ of length and the robot fell; ending the right step at 0.15 s let the left foot 
 The rule only shortens: a step made longer after a push is what Gait-Net's own answers
 already do wrong (``docs/design/gaitnet_recovery.md``).
 
-A landing (``end_at_touchdown``, an option): a swing foot that touches down in the second
+A landing (``end_at_touchdown``, on by default): a swing foot that touches down in the second
 half of its step with at least half the robot's weight on it ends the step at the next
 tick, so that the MPC takes it as its stance foot where it landed; otherwise the swing PD
 drives it on along the rest of its swing, below the ground. Only where the foot's centre
@@ -70,6 +78,7 @@ from gaitnet_mpc.gait import GaitSchedule, SwingTrajectory
 from gaitnet_mpc.gait.lip import lip_frequency
 from gaitnet_mpc.geometry import GRAVITY_MPS2, heading_axes
 from gaitnet_mpc.mpc.kinematic_rows import reach_geometry
+from gaitnet_mpc.mpc.sequential import FootholdBox
 from gaitnet_mpc.robots import FEET, RobotModel
 from gaitnet_mpc.state import RobotState
 
@@ -80,17 +89,19 @@ foothold (``end_at_touchdown``)."""
 
 @dataclass(frozen=True)
 class RetimeDecision:
-    """A shortened step: its new dt [s] and what the rule saw (for ``swing_events``)."""
+    """A shortened step: its new dt [s] and what the rule saw (for ``swing_events``:
+    ``kind`` "retime" for the capture-point rule, "landing" for a landed foot)."""
 
     dt_s: float
     dt_before_s: float
     time_in_step_s: float
     excess_before_m: float
     excess_after_m: float
+    kind: str = "retime"
 
     def to_dict(self, t_s: float, foot: str) -> dict[str, Any]:
         return {
-            "kind": "retime",
+            "kind": self.kind,
             "t_s": round(t_s, 4),
             "foot": foot,
             "dt_before_s": round(self.dt_before_s, 4),
@@ -153,6 +164,7 @@ def retime_step(
     reach_m: float,
     speed_cmd_mps: float,
     stages_per_step: int = 5,
+    box_xy_m: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> RetimeDecision | None:
     """The rule of the module docstring at one replan; None: keep the step's end.
 
@@ -160,7 +172,8 @@ def retime_step(
     bounds); ``com_m``, ``com_vel_mps``, ``stance_m``: measured CoM, its velocity and the
     stance foot (world, each (3,)); ``hip_offset_xy_m``: (2,) the swing leg's hip from the
     CoM in the heading frame; ``reach_m``: the reach square's half-width [m];
-    ``speed_cmd_mps``: the commanded speed along the heading.
+    ``speed_cmd_mps``: the commanded speed along the heading; ``box_xy_m``: (lo, hi),
+    each (2,), the eq. 24 box of the step's touchdown, or None (unbounded).
     """
     z = float(com_m[2] - stance_m[2])
     if z <= 0.05:  # not a pendulum
@@ -185,8 +198,12 @@ def retime_step(
     excess = reach_excess_m(tau, *pendulum, heading_rad, hip_offset_xy_m, b, reach_m)
     if excess[-1] <= 0.0:
         return None
-    ok = np.flatnonzero(excess <= 0.0)
-    if not ok.size and config.shortest_when_crossing and len(dts) > 1:
+    on_box = np.ones(len(tau), dtype=bool)
+    if box_xy_m is not None:  # the foothold p* must be one the terrain offers
+        p_star = capture_point_m(tau, *pendulum) - b * heading_axes(heading_rad)[0]
+        on_box = np.all((p_star >= box_xy_m[0]) & (p_star <= box_xy_m[1]), axis=1)
+    ok = np.flatnonzero((excess <= 0.0) & on_box)
+    if not ok.size and config.shortest_when_crossing and len(dts) > 1 and on_box[0]:
         # the capture point at the step's end, across the heading from the stance foot,
         # on the swing leg's side (> 0) or beyond the stance foot (< 0: crossing)
         xi_rel = capture_point_m(tau[-1:], *pendulum)[0] - pendulum[2]
@@ -248,8 +265,8 @@ class StepRetimer:
         """With ``config.end_at_touchdown``: where the swing foot has landed in the second
         half of the step, carrying at least half the robot's weight, on a foothold that
         ``landing`` (if given) accepts, the step ends at the next tick (or as soon as the
-        schedule's bounds allow); True if it was re-timed. Logged as a ``retime`` event
-        with zero reach excess."""
+        schedule's bounds allow); True if it was re-timed. Logged as a ``landing`` event
+        (zero reach excess)."""
         foot = schedule.swing_foot
         if (
             not self.config.end_at_touchdown
@@ -265,7 +282,7 @@ class StepRetimer:
         if dt >= schedule.current_step_dt_s - 1e-9:
             return False
         t_in = schedule.time_in_step_s
-        decision = RetimeDecision(dt, schedule.current_step_dt_s, t_in, 0.0, 0.0)
+        decision = RetimeDecision(dt, schedule.current_step_dt_s, t_in, 0.0, 0.0, "landing")
         self._shorten(state, schedule, swing, decision)
         return True
 
@@ -291,8 +308,10 @@ class StepRetimer:
         swing: SwingTrajectory | None,
         heading_rad: float,
         speed_cmd_mps: float,
+        box: FootholdBox | None = None,
     ) -> bool:
-        """Shorten the step under way (schedule and swing) if the rule asks; True if so."""
+        """Shorten the step under way (schedule and swing) if the rule asks; True if so.
+        ``box``: the eq. 24 box of the step's touchdown (None: unbounded)."""
         if swing is None:  # no step under way yet
             return False
         decision = retime_step(
@@ -308,6 +327,7 @@ class StepRetimer:
             reach_m=self.reach_m,
             speed_cmd_mps=speed_cmd_mps,
             stages_per_step=schedule.config.stages_per_step,
+            box_xy_m=None if box is None else (box.lo_m[:2], box.hi_m[:2]),
         )
         if decision is None:
             return False

@@ -91,9 +91,11 @@ class TerrainView:
     def holds_foot(self, foot: str, pos_m: ArrayLike) -> bool:
         """True iff a ``foot`` whose centre is at ``pos_m`` (x, y, ...) stands on a patch
         that allows it: the simulator's foothold rule (a landing elsewhere is a
-        violation). When blind, True: the contact is all a blind controller knows."""
+        violation). When blind, False: a blind controller cannot tell a foothold from a
+        stone's edge, and its touchdown search (``control/blind_touchdown.py``) handles
+        its landings."""
         if self.knowledge.blind:
-            return True
+            return False
         x, y = (float(v) for v in np.asarray(pos_m, dtype=float)[:2])
         return self._course.foot_allowed(x, y, foot)
 

@@ -244,6 +244,7 @@ class SequentialResult:
     step_dt_s: float  # the step's MPC dt the plan was made with (the policy's) [s]
     cost: float = math.nan  # eq. 18 at the plan (KDSubproblem.plan_cost)
     t_plan_s: float = 0.0
+    foothold_boxes: Mapping[str, FootholdBox] = field(default_factory=dict)  # the problem's
 
     def stage_at(self, t_s: float) -> int:
         """Index of the plan's stage that contains time ``t_s`` (clamped)."""
@@ -460,6 +461,7 @@ class SequentialKDMPC:
                 if step is None or inputs is None
                 else sub.plan_cost(iterate, step.states, inputs)
             ),
+            foothold_boxes=problem.foothold_boxes,
         )
 
 
