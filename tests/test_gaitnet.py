@@ -176,7 +176,7 @@ def test_gaitnet_controller_walks_flat_with_dts_from_the_net(humanoid, tmp_path)
     short = executed < planned - 1e-3
     assert np.all(executed <= planned + 1e-3) and np.all(executed >= 0.5 * planned)
     kinds = [e["kind"] for e in summary["swing_events"]]
-    assert short.sum() == kinds.count("landing") and "retime" not in kinds
+    assert short.sum() <= kinds.count("landing") and "retime" not in kinds
     assert all(len(d["dts_s"]) >= 1 for d in policy["steps"])
     # each decision records the net's input: 16 features, the CoM above the stance foot
     feats = np.array([d["features"] for d in policy["steps"]])
