@@ -28,6 +28,7 @@ from gaitnet_mpc.control.blind_touchdown import TouchdownSearch
 from gaitnet_mpc.control.disturbance_observer import MomentumObserver
 from gaitnet_mpc.control.dt_policies import make_dt_policy
 from gaitnet_mpc.control.kd_walk_config import KDWalkConfig, robot_kd_config
+from gaitnet_mpc.control.lip_reference import lip_com_reference
 from gaitnet_mpc.control.step_retiming import StepRetimer
 from gaitnet_mpc.control.swing_obstacles import SwingObstacles
 from gaitnet_mpc.control.terrain_view import TerrainView
@@ -36,7 +37,6 @@ from gaitnet_mpc.control.walking_base import WalkingBase
 from gaitnet_mpc.dt_policy import CONTROLLER_OF_POLICY
 from gaitnet_mpc.errors import ConfigError, QPSolveError
 from gaitnet_mpc.gait import GaitScheduleConfig, RaibertConfig, RaibertHeuristic, SwingTrajectory
-from gaitnet_mpc.gait.lip import lip_frequency, lip_sway_orbit, sway_phases
 from gaitnet_mpc.gait.preview import PreviewPlan, plan_areas, plan_preview
 from gaitnet_mpc.gaitnet.policy import GaitNetDt
 from gaitnet_mpc.geometry import heading_axes
@@ -230,42 +230,21 @@ class KDWalkController(WalkingBase):
     def _lip_reference(
         self, state: RobotState, timing: ReferenceTiming, cmd: Command
     ) -> CoMReference | None:
-        """CoM path and velocity (h+1, 3) whose lateral part is the LIP sway orbit.
-
-        With a line foot (no roll moment) the CoM obeys ``y'' = omega^2 (y - p_y)`` about the
-        stance foot ``p_y``, so a gait with feet at ``+-b`` beside a centre line needs the
-        periodic sway of :func:`~gaitnet_mpc.gait.lip.lip_sway_orbit`. The straight line with
-        ``l_y = 0`` is
-        only reachable with the feet under the CoM. The centre line is the commanded path
-        (lateral offset from the measured CoM clamped by ``lip_anchor_max_m``); x and the
-        height are f_ref's (NaN).
-        """
-        if self.robot.spec.planar or self.config.lateral_reference != "lip":
+        """The LIP sway reference (:func:`~gaitnet_mpc.control.lip_reference.lip_com_reference`)
+        about the commanded path, its lateral offset from the measured CoM clamped by
+        ``lip_anchor_max_m``; None where the lateral reference is the straight line."""
+        c = self.config
+        if self.robot.spec.planar or c.lateral_reference != "lip":
             return None
-        times = timing.times_s
-        dts = np.asarray(timing.dts_s, dtype=float)
-        contact = np.asarray(timing.contact, dtype=bool)
-        h = dts.size
-        side, tau, T = sway_phases(
-            times, dts, contact, timing.time_in_step_s, timing.stages_per_step
-        )
-        z = max(float(self.mpc.ref_workspace.com_height_m), self.config.lip_min_com_height_m)
-        w = lip_frequency(z)
-        y_off, v_off = lip_sway_orbit(side, self.config.lip_half_width_m, w, tau, T)
-        # centre line: commanded path, lateral offset from the measured CoM
         yaw = self.profile.heading_rad(state.t_s)
         e_x, e_y = heading_axes(yaw)
         lat = float(e_y @ (self._commanded_path_xy(state.t_s) - state.com_world_m[:2]))
-        lim = self.config.lip_anchor_max_m
-        if lim is not None:
-            lat = float(np.clip(lat, -lim, lim))
+        if c.lip_anchor_max_m is not None:
+            lat = float(np.clip(lat, -c.lip_anchor_max_m, c.lip_anchor_max_m))
+        z = max(float(self.mpc.ref_workspace.com_height_m), c.lip_min_com_height_m)
         v_cmd = e_x * cmd.vx_mps + e_y * cmd.vy_mps
-        centre = state.com_world_m[:2] + lat * e_y + times[:, None] * v_cmd
-        p = np.full((h + 1, 3), np.nan)
-        v = np.full((h + 1, 3), np.nan)
-        p[:, :2] = centre + y_off[:, None] * e_y
-        v[:, :2] = v_cmd + v_off[:, None] * e_y
-        return CoMReference(p, v)
+        com_xy = state.com_world_m[:2]
+        return lip_com_reference(timing, com_xy, z, yaw, lat, v_cmd, c.lip_half_width_m)
 
     def _plan_preview(self, state: RobotState, cmd: Command, first_step: bool) -> None:
         """Multi-step LIP footstep plan from now (None if off, planar, or without a

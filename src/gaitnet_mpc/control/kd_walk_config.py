@@ -214,7 +214,7 @@ class KDWalkConfig:
     )
     # Lateral CoM reference of eq. 18: "line" = f_ref's straight command line from the
     # path start with zero lateral momentum; "lip" = the periodic LIP sway orbit of a gait
-    # with feet at +-lip_half_width_m beside a centre line (see _lip_reference). "line"
+    # with feet at +-lip_half_width_m beside a centre line (control/lip_reference.py). "line"
     # plans a near-tightrope (feet 2-7 cm apart); "lip" a 0.19 m wide gait, but then the
     # feet at patch edges fail more often (docs/design/lateral_reference.md).
     lateral_reference: str = "line"
