@@ -61,6 +61,14 @@ def report(sweeps: dict[str, Cells]) -> str:
         lines.append("")
         lines.append(f"`{first}` at least the best of the others: {best}/{len(keys)} cells.")
     order = list(DIRECTIONS)
+    by_cell = sorted(keys, key=lambda k: (k[1], order.index(k[0])))
+    if others:
+        short = []
+        for d, p in by_cell:
+            top = max(others, key=lambda o: sweeps[o][d, p])
+            if mine[d, p] < sweeps[top][d, p]:
+                short.append(f"{d} p{p:g} {mine[d, p]:g} < {sweeps[top][d, p]:g} N (`{top}`)")
+        lines.append("Below the best of the others: " + (", ".join(short) or "none") + ".")
     below = sorted(
         (k for k in keys if mine[k] < floor_n(k[0])), key=lambda k: (k[1], order.index(k[0]))
     )
