@@ -69,9 +69,7 @@ def report(sweeps: dict[str, Cells]) -> str:
             if mine[d, p] < sweeps[top][d, p]:
                 short.append(f"{d} p{p:g} {mine[d, p]:g} < {sweeps[top][d, p]:g} N (`{top}`)")
         lines.append("Below the best of the others: " + (", ".join(short) or "none") + ".")
-    below = sorted(
-        (k for k in keys if mine[k] < floor_n(k[0])), key=lambda k: (k[1], order.index(k[0]))
-    )
+    below = [k for k in by_cell if mine[k] < floor_n(k[0])]
     lines.append(
         f"Below the floor (100 N fwd / bwd, 50 N elsewhere): {len(below)}/{len(keys)} cells"
         + ("" if not below else ": " + ", ".join(f"{d} p{p:g} {mine[d, p]:g} N" for d, p in below))

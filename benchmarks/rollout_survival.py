@@ -33,7 +33,7 @@ def survival_table(paths: list[Path]) -> str:
                 outcomes = step.get("outcomes") or {}
                 total += bool(outcomes)
                 fell = [o["fell"] for o in outcomes.values()]
-                if not fell or all(fell) or not any(fell):
+                if all(fell) or not any(fell):
                     continue
                 error = step["features"][0][vx] - rec["speed_mps"]
                 b = sum(error >= e for e in EDGES_MPS)
