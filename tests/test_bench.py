@@ -92,4 +92,4 @@ def test_the_realtime_cases_run_the_preset_itself() -> None:
         _, ctrl = build_case(case, SPEC)
         rti = "--preset realtime" in case.label
         assert (ctrl.config.replan_j_max == 1) == rti
-        assert ctrl.config.warm_start_replans == rti
+        assert ctrl.config.warm_start_replans == ctrl.config.converge_new_stages == rti

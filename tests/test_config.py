@@ -76,7 +76,9 @@ def test_preset_files_give_the_configs_of_the_former_factories(planar: bool) -> 
     default = _default_walk_config(planar)
     assert load_preset(KDWalkConfig, "kd", "default", planar) == default
     realtime = load_preset(KDWalkConfig, "kd", "realtime", planar)
-    assert realtime == replace(default, replan_j_max=1, warm_start_replans=True)
+    assert realtime == replace(
+        default, replan_j_max=1, warm_start_replans=True, converge_new_stages=True
+    )
     assert load_preset(KDWalkConfig, "kd", "blind", planar) == replace(default, blind=True)
     fast = replace(default.dt_policy, bounds_s=(0.035, 0.07))
     assert load_preset(KDWalkConfig, "kd", "fastdt", planar) == replace(default, dt_policy=fast)

@@ -427,6 +427,41 @@ def test_warm_started_replans_start_from_the_last_plan(humanoid) -> None:
     assert np.median(first_steps[True]) < 0.2 * np.median(first_steps[False])
 
 
+def test_replans_converge_where_the_horizon_passes_the_last_plan(humanoid) -> None:
+    """With ``converge_new_stages``, a capped replan (one warm QP) runs to convergence
+    where its horizon has a stage past the last plan's (``SequentialResult.covers``) and
+    takes one QP elsewhere; both kinds occur within half a second of walking."""
+    from dataclasses import replace
+
+    from gaitnet_mpc.control.kd_walk_config import KDWalkConfig
+
+    course, command = load_course("flat"), Command(vx_mps=0.5)
+    sim = Simulator(humanoid, course)
+    config = replace(
+        KDWalkConfig(), replan_j_max=1, warm_start_replans=True, converge_new_stages=True
+    )
+    ctrl = KDWalkController(humanoid, TerrainView(course), command, config=config)
+    mpc_solve, kinds = ctrl.mpc.solve, {True: [], False: []}
+
+    def record(problem):
+        result = mpc_solve(problem)
+        if problem.warm_start is not None:  # a replan after a plan
+            new_stage = not problem.warm_start.covers(problem.t_s, result.dts_s)
+            kinds[new_stage].append((result.n_qps, result.converged))
+        return result
+
+    ctrl.mpc.solve = record
+    state = sim.state()
+    ctrl.reset(state)
+    while state.t_s < 0.5:
+        sim.step(ctrl.compute(state))
+        state = sim.state()
+    assert len(kinds[True]) > 3 and len(kinds[False]) > 3
+    assert all(n == 1 for n, _ in kinds[False])
+    assert all(converged for _, converged in kinds[True])
+    assert max(n for n, _ in kinds[True]) > 1
+
+
 def test_reference_pose_selects_eq30_in_f_ref_and_f_ik(humanoid) -> None:
     """``SequentialConfig.reference_pose = "eq30"`` (the paper preset's) makes the MPC's
     reference workspace build ``H_ref`` by eq. 30; the first plan still converges, and its

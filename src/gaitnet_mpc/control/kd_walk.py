@@ -193,6 +193,15 @@ class KDWalkController(WalkingBase):
         commanded path is ``lateral_return_time_s``'s)."""
         return state.com_world_m.copy()
 
+    def _converges(self, t_s: float, timing: ReferenceTiming) -> bool:
+        """Whether a replan at ``t_s`` runs to convergence: its horizon has a stage past the
+        last plan's (``KDWalkConfig.converge_new_stages``)."""
+        return (
+            self.config.converge_new_stages
+            and self.plan is not None
+            and not self.plan.covers(t_s, np.asarray(timing.dts_s, dtype=float))
+        )
+
     def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, FootholdBox]:
         """Eq. 24 box for the swing foot's next touchdown.
 
@@ -379,7 +388,7 @@ class KDWalkController(WalkingBase):
             foothold_boxes=self._bounds(state, swing, target),
             p_com_start_m=self._path_start(state),
             com_reference=lambda t: self._com_reference(state, t, cmd),
-            j_max=None if full else self.config.replan_j_max,
+            j_max=None if full or self._converges(state.t_s, timing) else self.config.replan_j_max,
             choose_dt=full,
             step_index=sched.step_index,
             state=StepState(state, stance, swing) if full else None,

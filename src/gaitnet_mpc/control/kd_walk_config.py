@@ -117,6 +117,10 @@ class KDWalkConfig:
     # A replan starts its iterations from the last plan shifted to the new horizon
     # (mpc/kd_iterate.py shift_iterate), not from the references (KDIterate.initial).
     warm_start_replans: bool = False
+    # A replan whose horizon reaches past the last plan's (a stage was added at its end)
+    # runs up to ``sequential.j_max`` QPs, not ``replan_j_max``: the added stage has no
+    # planned values to start from. docs/design/realtime.md, item 28.
+    converge_new_stages: bool = False
     # the command is ramped up from rest at this rate
     max_accel_mps2: float = bounded(1.0, ACCEL_INTERVAL, "an acceleration", ACCEL_REASON)
     sequential: SequentialConfig = field(

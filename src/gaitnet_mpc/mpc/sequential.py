@@ -246,6 +246,12 @@ class SequentialResult:
     t_plan_s: float = 0.0
     foothold_boxes: Mapping[str, FootholdBox] = field(default_factory=dict)  # the problem's
 
+    def covers(self, t_s: float, dts_s: np.ndarray) -> bool:
+        """Whether this plan reaches the end of a horizon of stages ``dts_s`` [s] that starts
+        at ``t_s`` [s] (else the horizon has stages past it, which a shifted warm start
+        fills with references)."""
+        return t_s + float(np.sum(dts_s)) <= self.t_plan_s + float(np.sum(self.dts_s)) + 1e-9
+
     def stage_at(self, t_s: float) -> int:
         """Index of the plan's stage that contains time ``t_s`` (clamped)."""
         boundaries = self.t_plan_s + np.cumsum(self.dts_s)
