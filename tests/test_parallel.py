@@ -85,3 +85,20 @@ def test_sigterm_becomes_keyboard_interrupt_inside_the_block() -> None:
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5.0)  # the handler runs at the next bytecode; never reached
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_an_interrupt_swallowed_by_a_ctypes_callback_is_delivered_again() -> None:
+    """A KeyboardInterrupt raised inside a ctypes callback (as when a signal lands while
+    numba writes its object cache) is only printed by Python; inside the block it is
+    signalled again and stops the caller (a swallowed SIGINT once let a run go on)."""
+    import ctypes
+    import sys
+
+    def callback() -> None:
+        raise KeyboardInterrupt
+
+    hook = sys.unraisablehook
+    with pytest.raises(KeyboardInterrupt), stop_signals_as_keyboard_interrupt():
+        ctypes.CFUNCTYPE(None)(callback)()
+        time.sleep(5.0)  # the re-delivered SIGINT lands here; never reached
+    assert sys.unraisablehook is hook

@@ -18,8 +18,11 @@ exit status 130).
 
 from __future__ import annotations
 
+import functools
+import os
 import signal
 import socket
+import sys
 import threading
 from collections.abc import Callable, Generator, Iterator, Sequence
 from contextlib import contextmanager
@@ -272,15 +275,34 @@ def stop_signals_as_keyboard_interrupt() -> Iterator[None]:
     SIGINT is set as well because a process started in the background of a
     non-interactive shell (``cmd &``, ``nohup``) inherits it ignored, and Python then
     never raises KeyboardInterrupt: such a run could not be stopped with ``kill -INT``.
+
+    A KeyboardInterrupt raised where Python cannot pass it on (inside a ctypes callback,
+    e.g. numba's object cache while a kernel compiles) is only printed, and the run would go
+    on; :func:`_redeliver_interrupt` signals again, so it lands in the next Python code.
     """
     previous_term = signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
     previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = functools.partial(_redeliver_interrupt, previous_hook)
     try:
         yield
     finally:
+        sys.unraisablehook = previous_hook
         signal.signal(signal.SIGTERM, previous_term)
         signal.signal(signal.SIGINT, previous_int)
 
 
 def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
+
+
+def _redeliver_interrupt(previous: Callable[[Any], object], unraisable: Any) -> None:
+    """``sys.unraisablehook``: an interrupt that could not be raised is signalled again,
+    from another thread a moment later, so that it is raised in the main thread's next
+    Python code and not in this hook (where it would be swallowed as well)."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+        timer.daemon = True
+        timer.start()
+    else:
+        previous(unraisable)
