@@ -27,27 +27,24 @@ from common import add_out_option, command_line, machine_info, write_report
 from gaitnet_mpc.cli import main as cli_main
 from gaitnet_mpc.mpc import implicit_kd, kd_condensed, kd_inputs, sequential
 
-#: (owner, attribute, label) of each timed part, outermost first.
-PARTS: tuple[tuple[Any, str, str], ...] = (
-    (sequential.SequentialKDMPC, "_references", "f_ref (line 2-3)"),
-    (sequential.SequentialKDMPC, "_f_ik", "f_IK (line 9)"),
-    (sequential, "angular_pose_kgm2", "angular-pose map"),
-    (implicit_kd.KDSubproblem, "inputs", "QP inputs, checked"),
-    (kd_inputs.KDInputs, "with_references", "QP inputs, new references"),
-    (implicit_kd.KDSubproblem, "condensed_qp", "condensing"),
-    (kd_condensed.KDCondensed, "solve", "DAQP and expansion"),
-    (implicit_kd.KDSubproblem, "solve", "sub-problem solve (condensing + DAQP + step)"),
-    (implicit_kd.KDSubproblem, "plan_cost", "plan cost (eq. 18, logged)"),
-    (sequential.KDIterate, "apply", "iterate update (line 7)"),
-    (sequential, "f_j2m", "f_j2m (line 1)"),
+#: (owner, attribute, label, nested) of each timed part; a nested part runs inside another
+#: one (the condensing and DAQP inside the sub-problem solve).
+PARTS: tuple[tuple[Any, str, str, bool], ...] = (
+    (sequential.SequentialKDMPC, "_references", "f_ref (line 2-3)", False),
+    (sequential.SequentialKDMPC, "_f_ik", "f_IK (line 9)", False),
+    (sequential, "angular_pose_kgm2", "angular-pose map", False),
+    (implicit_kd.KDSubproblem, "inputs", "QP inputs, checked", False),
+    (kd_inputs.KDInputs, "with_references", "QP inputs, new references", False),
+    (implicit_kd.KDSubproblem, "condensed_qp", "condensing", True),
+    (kd_condensed.KDCondensed, "solve", "DAQP and expansion", True),
+    (implicit_kd.KDSubproblem, "solve", "sub-problem solve (condensing + DAQP + step)", False),
+    (implicit_kd.KDSubproblem, "plan_cost", "plan cost (eq. 18, logged)", False),
+    (sequential.KDIterate, "apply", "iterate update (line 7)", False),
+    (sequential, "f_j2m", "f_j2m (line 1)", False),
 )
 
-
-#: The parts that do not run inside one another (the condensing and DAQP run inside the
-#: sub-problem solve).
-TOP_LEVEL = tuple(
-    label for _, _, label in PARTS if label not in ("condensing", "DAQP and expansion")
-)
+#: The parts that do not run inside one another: they add up to the solve.
+TOP_LEVEL = tuple(label for _, _, label, nested in PARTS if not nested)
 
 
 def _timed(fn: Callable[..., Any], label: str, acc: dict[str, float]) -> Callable[..., Any]:
@@ -65,7 +62,7 @@ def measure(run_args: list[str]) -> dict[str, list[dict[str, float]]]:
     """Per solve (``full`` / ``replan``) the seconds of each part and of the whole solve."""
     acc: dict[str, float] = defaultdict(float)
     solves: dict[str, list[dict[str, float]]] = {"full": [], "replan": []}
-    saved = [(owner, name, getattr(owner, name)) for owner, name, _ in PARTS]
+    saved = [(owner, name, getattr(owner, name)) for owner, name, _, _ in PARTS]
     solve = sequential.SequentialKDMPC.solve
 
     def timed_solve(self: Any, problem: Any) -> Any:
@@ -79,7 +76,7 @@ def measure(run_args: list[str]) -> dict[str, list[dict[str, float]]]:
         return result
 
     try:
-        for owner, name, label in PARTS:
+        for owner, name, label, _ in PARTS:
             setattr(owner, name, _timed(getattr(owner, name), label, acc))
         sequential.SequentialKDMPC.solve = timed_solve  # type: ignore[method-assign]
         with tempfile.TemporaryDirectory() as tmp:
@@ -92,7 +89,7 @@ def measure(run_args: list[str]) -> dict[str, list[dict[str, float]]]:
 
 
 def report(solves: dict[str, list[dict[str, float]]]) -> str:
-    labels = ["whole solve", *(label for _, _, label in PARTS), "the rest of the solve"]
+    labels = ["whole solve", *(label for _, _, label, _ in PARTS), "the rest of the solve"]
     rows = ["| part | full solve, median ms | replan, median ms |", "|---|---|---|"]
     for label in labels:
         cells = [

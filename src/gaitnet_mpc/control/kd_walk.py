@@ -199,7 +199,7 @@ class KDWalkController(WalkingBase):
         return (
             self.config.converge_new_stages
             and self.plan is not None
-            and not self.plan.covers(t_s, np.asarray(timing.dts_s, dtype=float))
+            and not self.plan.covers(t_s, timing.dts_s)
         )
 
     def _bounds(self, state: RobotState, foot: str, nominal: np.ndarray) -> dict[str, FootholdBox]:
